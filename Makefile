@@ -1,0 +1,23 @@
+PY := .venv/bin/python
+STAMP := .venv/.installed
+
+.PHONY: sweep test bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || python3 -m venv .venv
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
+	touch $(STAMP)
+
+sweep: $(STAMP)
+	.venv/bin/dlasweep sweep workflows/quick.toml -o results/quick.nc
+	.venv/bin/dlasweep report results/quick.nc -o results/quick
+
+test: $(STAMP)
+	$(PY) -m pytest
+
+bench: $(STAMP)
+	.venv/bin/dlasweep bench -o results/bench
+
+clean:
+	rm -rf .venv results/*.parts
