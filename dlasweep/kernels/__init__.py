@@ -1,0 +1,1 @@
+"""Numba kernels: no I/O, RNG state passed in explicitly."""

@@ -1,0 +1,91 @@
+"""Exact random-walk moves shared by every model.
+
+Uniform directions, walk-on-spheres jumps, and the exact return of a walker
+from outside the launch circle/sphere or above the launch line/plane.
+"""
+
+import numpy as np
+
+from .._jit import jit
+
+
+@jit
+def direction(rng, dim, out):
+    """Fill ``out[:dim]`` with a uniform random unit vector."""
+    if dim == 2:
+        a = 2.0 * np.pi * rng.random()
+        out[0] = np.cos(a)
+        out[1] = np.sin(a)
+        out[2] = 0.0
+        return
+    cz = 2.0 * rng.random() - 1.0
+    a = 2.0 * np.pi * rng.random()
+    sz = np.sqrt(max(0.0, 1.0 - cz * cz))
+    out[0] = sz * np.cos(a)
+    out[1] = sz * np.sin(a)
+    out[2] = cz
+
+
+@jit
+def return_to_sphere(rng, dim, pos, radius, scratch):
+    """Move a walker at ``|pos| > radius`` to where it first hits the sphere.
+
+    2D: the exterior Poisson kernel is a wrapped Cauchy law in the angle with
+    concentration ``radius / |pos|``; the walker always returns.
+    3D: it escapes to infinity with probability ``1 - radius/|pos|`` (returns
+    False); otherwise the hitting point follows the Kelvin image of the
+    interior Poisson kernel from the inverted point ``radius**2 / |pos|``.
+    Returns True when the walker was placed on the sphere.
+    """
+    r = np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
+    if dim == 2:
+        rho = radius / r
+        half = np.tan(np.pi * (rng.random() - 0.5)) * (1.0 - rho) / (1.0 + rho)
+        a = np.arctan2(pos[1], pos[0]) + 2.0 * np.arctan(half)
+        pos[0] = radius * np.cos(a)
+        pos[1] = radius * np.sin(a)
+        return True
+    if rng.random() >= radius / r:
+        return False
+    inner = radius * radius / r  # distance of the Kelvin image from the centre
+    lo, hi = 1.0 / (radius + inner), 1.0 / (radius - inner)
+    inv = hi - rng.random() * (hi - lo)
+    cos_t = (radius * radius + inner * inner - 1.0 / (inv * inv)) / (2.0 * inner * radius)
+    cos_t = min(1.0, max(-1.0, cos_t))
+    sin_t = np.sqrt(1.0 - cos_t * cos_t)
+    # orthonormal frame (axis, e1, e2) around the walker's direction
+    ax, ay, az = pos[0] / r, pos[1] / r, pos[2] / r
+    if abs(ax) < 0.9:
+        e1x, e1y, e1z = 0.0, az, -ay
+    else:
+        e1x, e1y, e1z = -az, 0.0, ax
+    n1 = np.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
+    e1x, e1y, e1z = e1x / n1, e1y / n1, e1z / n1
+    e2x, e2y, e2z = ay * e1z - az * e1y, az * e1x - ax * e1z, ax * e1y - ay * e1x
+    phi = 2.0 * np.pi * rng.random()
+    c, s = sin_t * np.cos(phi), sin_t * np.sin(phi)
+    pos[0] = radius * (cos_t * ax + c * e1x + s * e2x)
+    pos[1] = radius * (cos_t * ay + c * e1y + s * e2y)
+    pos[2] = radius * (cos_t * az + c * e1z + s * e2z)
+    return True
+
+
+@jit
+def return_to_plane(rng, dim, pos, height, width):
+    """Move a walker above ``height`` (last axis up) to where it first hits it.
+
+    The half-space Poisson kernel: a Cauchy offset (2D) or its radial
+    analogue (3D) with scale ``pos_up - height``; the periodic sides of width
+    ``width`` wrap it, which gives the strip's exact kernel.
+    """
+    up = dim - 1
+    h = pos[up] - height
+    if dim == 2:
+        pos[0] = (pos[0] + h * np.tan(np.pi * (rng.random() - 0.5))) % width
+    else:
+        u = rng.random()
+        rad = h * np.sqrt(1.0 / ((1.0 - u) * (1.0 - u)) - 1.0)
+        a = 2.0 * np.pi * rng.random()
+        pos[0] = (pos[0] + rad * np.cos(a)) % width
+        pos[1] = (pos[1] + rad * np.sin(a)) % width
+    pos[up] = height
