@@ -13,7 +13,7 @@ import numpy as np
 
 from .._jit import clock, jit
 from . import maps
-from .walk import direction, return_to_plane, return_to_sphere
+from .walk import below, direction, return_to_plane, return_to_sphere
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -134,7 +134,7 @@ def _grow(
         placed = 0
         while placed < walkers:
             for a in range(dim):
-                wpos[placed, a] = box_lo + rng.integers(0, box_hi - box_lo + 1)
+                wpos[placed, a] = box_lo + below(rng, box_hi - box_lo + 1)
             if not _occupied(words, dim, start, blocks, width, off, wpos[placed, 0], wpos[placed, 1], wpos[placed, 2]):
                 alive[placed] = True
                 placed += 1
@@ -169,9 +169,9 @@ def _grow(
             if need_launch:
                 need_launch = False
                 if launch_box:
-                    ax = rng.integers(0, dim)
+                    ax = below(rng, dim)
                     for a in range(dim):
-                        pos[a] = (0 if line else lo) + rng.integers(0, size)
+                        pos[a] = (0 if line else lo) + below(rng, size)
                     if line:
                         pos[up] = size - 1
                     else:
@@ -284,7 +284,7 @@ def _grow(
                     if status != OK:
                         break
                 continue
-        m = rng.integers(0, moves.shape[0])
+        m = below(rng, moves.shape[0])
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
         if line:
             n0 = n0 % period

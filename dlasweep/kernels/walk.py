@@ -10,20 +10,33 @@ from .._jit import jit
 
 
 @jit
+def below(rng, m):
+    """A uniform integer in [0, m); far cheaper in numba than ``rng.integers``."""
+    return np.int64(rng.random() * m)
+
+
+@jit
 def direction(rng, dim, out):
-    """Fill ``out[:dim]`` with a uniform random unit vector."""
+    """Fill ``out[:dim]`` with a uniform random unit vector.
+
+    Rejection from the unit disk (Marsaglia's method in 3D) avoids the
+    trigonometric calls, which cost more than the extra draws.
+    """
+    while True:
+        u = 2.0 * rng.random() - 1.0
+        v = 2.0 * rng.random() - 1.0
+        s = u * u + v * v
+        if 0.0 < s < 1.0:
+            break
     if dim == 2:
-        a = 2.0 * np.pi * rng.random()
-        out[0] = np.cos(a)
-        out[1] = np.sin(a)
+        out[0] = (u * u - v * v) / s
+        out[1] = 2.0 * u * v / s
         out[2] = 0.0
         return
-    cz = 2.0 * rng.random() - 1.0
-    a = 2.0 * np.pi * rng.random()
-    sz = np.sqrt(max(0.0, 1.0 - cz * cz))
-    out[0] = sz * np.cos(a)
-    out[1] = sz * np.sin(a)
-    out[2] = cz
+    f = 2.0 * np.sqrt(1.0 - s)
+    out[0] = u * f
+    out[1] = v * f
+    out[2] = 1.0 - 2.0 * s
 
 
 @jit
