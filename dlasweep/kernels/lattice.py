@@ -86,6 +86,74 @@ def _in_contact(words, dim, start, blocks, width, off, q, moves, period):
 
 
 @jit
+def _outside(q, dim, line, lo, hi):
+    """Whether site q has left the box (for substrates: through the top)."""
+    if line:
+        return q[dim - 1] > hi
+    for a in range(dim):
+        if q[a] < lo or q[a] > hi:
+            return True
+    return False
+
+
+@jit
+def _near_walk(
+    words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
+    jumps, boxed, lo, hi, radius, budget,
+):
+    """Single lattice steps from site q until the walker sticks or may leave.
+
+    At each site the walker first sticks with probability ``stickiness`` if it
+    touches the cluster, else it steps to a random neighbour (staying put when
+    that is occupied). It stops, without sticking, after ``budget`` steps (0:
+    no limit), on leaving the box, beyond ``radius`` (0: none) or, when
+    ``jumps``, where a jump becomes possible again (level-2 map clear).
+
+    Returns
+    -------
+    stuck : bool
+    taken : int, the steps taken
+    """
+    up = dim - 1
+    line = period > 0
+    taken = 0
+    nm = moves.shape[0]
+    while True:
+        i, j, k = q[0] + off, q[1] + off, q[2] + off
+        ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
+        # the level-1 map is clear unless a particle is within two sites
+        near = ingrid and maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1)
+        if near or (line and q[up] <= 1):
+            if _in_contact(words, dim, start, blocks, width, off, q, moves, period):
+                if stickiness >= 1.0 or rng.random() < stickiness:
+                    return True, taken
+        m = below(rng, nm)
+        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+        if line:
+            n0 = n0 % period
+            if dim == 3:
+                n1 = n1 % period
+        taken += 1
+        blocked = near and _occupied(words, dim, start, blocks, width, off, n0, n1, n2)
+        if not blocked and not (line and (n0, n1, n2)[up] < 0):
+            q[0], q[1], q[2] = n0, n1, n2
+        if taken == budget:
+            return False, taken
+        if boxed and _outside(q, dim, line, lo, hi):
+            return False, taken
+        if radius > 0.0:
+            r2 = float(q[up] * q[up]) if line else float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])
+            if r2 > radius * radius:
+                return False, taken
+        if jumps:
+            i, j, k = q[0] + off, q[1] + off, q[2] + off
+            if not (0 <= i < width and 0 <= j < width and 0 <= k < width):
+                return False, taken
+            if not maps.test(words, dim, start, blocks, 2, i >> 2, j >> 2, k >> 2):
+                return False, taken
+
+
+@jit
 def _grow(
     n, dim, moves, stickiness, seed_shape, size, launch_box, launch_factor, launch_margin,
     kill_factor, jumps, walkers, max_steps, marks, rng, points, steps, times,
@@ -126,11 +194,12 @@ def _grow(
     pending = np.int64(0)  # steps since the previous attachment
     status = OK
 
+    # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
+    box_lo = 0 if line else lo
+    box_hi = size - 1 if line else hi
     alive = np.zeros(max(walkers, 1), np.bool_)
     wpos = np.zeros((max(walkers, 1), 3), np.int64)
     if walkers > 1:
-        box_hi = hi if not line else size - 1
-        box_lo = lo if not line else 0
         placed = 0
         while placed < walkers:
             for a in range(dim):
@@ -142,6 +211,8 @@ def _grow(
     turn = 0
     w = 0
     need_launch = True
+    stuck = False
+    level = 1
 
     while count < n:
         if max_steps > 0 and total >= max_steps:
@@ -163,8 +234,20 @@ def _grow(
                 continue
             for a in range(3):
                 q[a] = wpos[w, a]
-            # a walker left on a site another one just filled must move off it
-            stepped = not _occupied(words, dim, start, blocks, width, off, q[0], q[1], q[2])
+            if _occupied(words, dim, start, blocks, width, off, q[0], q[1], q[2]):
+                # another walker just filled this site: the two coalesce
+                alive[w] = False
+                live -= 1
+                continue
+            stuck, taken = _near_walk(
+                words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
+                False, True, box_lo, box_hi, 0.0, 1,
+            )
+            for a in range(3):
+                wpos[w, a] = q[a]
+            if not stuck and _outside(q, dim, line, box_lo, box_hi):
+                alive[w] = False
+                live -= 1
         else:
             if need_launch:
                 need_launch = False
@@ -185,13 +268,14 @@ def _grow(
                     for a in range(dim):
                         pos[a] = launch_r * scratch[a]
             r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
-            # beyond the kill radius, or above/outside the launch boundary
-            if kill_factor > 0.0 and r > kill_factor * launch_r:
+            kill_r = kill_factor * launch_r
+            # any radius beyond the launch circle is exact for the return; a
+            # unit gap spares a walker that rounding put a hair outside it
+            return_r = launch_r + 1.0 if kill_factor == 0.0 and not boxed and not launch_box else 0.0
+            if kill_factor > 0.0 and r > kill_r:
                 need_launch = True
                 continue
-            # any threshold beyond the launch circle is exact; a unit gap avoids re-returning
-            # a walker that rounding put a hair outside it
-            if kill_factor == 0.0 and not boxed and not launch_box and r > launch_r + 1.0:
+            if return_r > 0.0 and r > return_r:
                 total += 1
                 pending += 1
                 if line:
@@ -201,35 +285,26 @@ def _grow(
                 continue
             for a in range(3):
                 q[a] = _site(pos[a])
-            if boxed or (line and launch_box):
-                outside = False
-                for a in range(dim):
-                    if line and a != up:
-                        continue
-                    if q[a] < (0 if line else lo) or q[a] > hi + (size // 2 if line else 0):
-                        outside = True
-                if outside:
-                    need_launch = True
-                    continue
+            if (boxed or launch_box) and _outside(q, dim, line, box_lo, box_hi):
+                need_launch = True
+                continue
             # lower bound on the distance to the nearest particle
             free = r - (h_max if line else r_max)
             i, j, k = q[0] + off, q[1] + off, q[2] + off
-            level = 0
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-                level = maps.clear_level(words, dim, start, blocks, cells, i, j, k)
+                level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
                 # unmarked periodic images lie at least one period away
-                bound = float(1 << level) if level > 0 else 0.0
                 free = max(free, min(bound, float(period)) if line else bound)
             if line:
                 free = min(free, pos[up] + 1.0)
             reach = free - JUMP_MARGIN
             if kill_factor > 0.0:
-                reach = min(reach, kill_factor * launch_r - r)
+                reach = min(reach, kill_r - r)
             if boxed:
                 for a in range(dim):
                     reach = min(reach, pos[a] - lo, hi - pos[a])
             elif line and launch_box:
-                reach = min(reach, size - 1 - pos[up])
+                reach = min(reach, box_hi - pos[up])
             if jumps and reach >= 2.0:
                 direction(rng, dim, scratch)
                 for a in range(dim):
@@ -240,73 +315,45 @@ def _grow(
                 total += 1
                 pending += 1
                 continue
-            stepped = level == 0 or (line and q[up] == 0)
-        # single-site dynamics at q: stick with probability s on contact, else step
-        if stepped and _in_contact(words, dim, start, blocks, width, off, q, moves, period):
-            if stickiness >= 1.0 or rng.random() < stickiness:
-                for a in range(dim):
-                    points[count, a] = q[a]
-                steps[count] = pending
-                pending = 0
-                count += 1
-                rq = np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]))
-                r_max = max(r_max, rq)
-                h_max = max(h_max, float(q[up]))
-                extent = 0
-                for a in range(dim):
-                    extent = max(extent, abs(q[a]))
-                if line:
-                    grow_grid = q[up] + off + 4 >= width
-                else:
-                    grow_grid = extent + 4 >= off
-                if grow_grid:
-                    width *= 2
-                    if not line:
-                        off = width // 2
-                    words, start, blocks, cells = _rebuild(points, count, dim, width, off, period)
-                else:
-                    _mark_images(words, dim, start, blocks, cells, width, off, q, period)
-                while mi < len(marks) and marks[mi] <= count:
-                    times[mi] = clock() - t0
-                    mi += 1
-                if walkers > 1:
-                    alive[w] = False
-                    live -= 1
-                else:
-                    need_launch = True
-                if launch_box and walkers == 1:
-                    for a in range(dim):
-                        if line:
-                            if a == up and q[a] >= size - 2:
-                                status = BOUNDARY
-                        elif q[a] <= lo + 1 or q[a] >= hi - 1:
-                            status = BOUNDARY
-                    if status != OK:
-                        break
-                continue
-        m = below(rng, moves.shape[0])
-        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
-        if line:
-            n0 = n0 % period
-            if dim == 3:
-                n1 = n1 % period
-        total += 1
-        pending += 1
-        if (line and (n0, n1, n2)[up] < 0) or _occupied(words, dim, start, blocks, width, off, n0, n1, n2):
-            n0, n1, n2 = q[0], q[1], q[2]
-        if walkers > 1:
-            wpos[w, 0], wpos[w, 1], wpos[w, 2] = n0, n1, n2
-            lo_w = 0 if line else lo
+            stuck, taken = _near_walk(
+                words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
+                jumps, boxed or launch_box, box_lo, box_hi, kill_r if kill_factor > 0.0 else return_r,
+                max_steps - total if max_steps > 0 else 0,
+            )
+            total += taken
+            pending += taken
+            for a in range(3):
+                pos[a] = q[a]
+        if stuck:
             for a in range(dim):
-                if line and a != up:
-                    continue
-                hi_w = size - 1 if line else hi
-                if (n0, n1, n2)[a] < lo_w or (n0, n1, n2)[a] > hi_w:
-                    alive[w] = False
-                    live -= 1
-                    break
-        else:
-            pos[0], pos[1], pos[2] = n0, n1, n2
+                points[count, a] = q[a]
+            steps[count] = pending
+            pending = 0
+            count += 1
+            r_max = max(r_max, np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])))
+            h_max = max(h_max, float(q[up]))
+            extent = 0
+            for a in range(dim):
+                extent = max(extent, abs(q[a]))
+            if (q[up] + off + 4 >= width) if line else (extent + 4 >= off):
+                width *= 2
+                if not line:
+                    off = width // 2
+                words, start, blocks, cells = _rebuild(points, count, dim, width, off, period)
+            else:
+                _mark_images(words, dim, start, blocks, cells, width, off, q, period)
+            while mi < len(marks) and marks[mi] <= count:
+                times[mi] = clock() - t0
+                mi += 1
+            if walkers > 1:
+                alive[w] = False
+                live -= 1
+            else:
+                need_launch = True
+            # with box launch, growth ends where the cluster meets the box
+            if launch_box and walkers == 1 and _outside(q, dim, line, box_lo + 2, box_hi - 2):
+                status = BOUNDARY
+                break
     return count, status
 
 

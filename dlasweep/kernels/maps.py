@@ -107,3 +107,39 @@ def allocate(dim, width):
     """An empty grid of side ``width``: (words, start, blocks, cells)."""
     start, blocks, cells = layout(dim, width)
     return np.zeros(start[-1], np.uint64), start, blocks, cells
+
+
+@jit
+def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
+    """Largest clear level about cell (i, j, k) and the distance it guarantees.
+
+    The search starts at ``guess`` (a walker's previous level) and moves one
+    level at a time, which beats bisection for walkers that move locally.
+    A clear level ``s`` means no particle in the 3**dim block of level-``s``
+    cells around the walker's, so every particle is at least as far as the
+    nearest face of that block: ``2**s`` plus the walker's offset in its cell.
+
+    Returns
+    -------
+    level : int, 0 when even level 1 is set
+    bound : float, a lower bound on the distance from the centre of cell
+        (i, j, k) to the nearest marked cell (0 when level is 0)
+    """
+    top = len(cells) - 1
+    s = min(max(guess, 1), top)
+    if test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
+        while s > 1:
+            s -= 1
+            if not test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
+                break
+        else:
+            return 0, 0.0
+    else:
+        while s < top and not test(words, dim, start, blocks, s + 1, i >> (s + 1), j >> (s + 1), k >> (s + 1)):
+            s += 1
+    side = 1 << s
+    mask = side - 1
+    near = min(i & mask, side - 1 - (i & mask), j & mask, side - 1 - (j & mask))
+    if dim == 3:
+        near = min(near, k & mask, side - 1 - (k & mask))
+    return s, float(side + near) + 0.5

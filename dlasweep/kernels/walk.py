@@ -52,11 +52,17 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
     """
     r = np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
     if dim == 2:
+        # the Moebius map z -> (z + rho) / (1 + rho z) takes the uniform law on
+        # the unit circle to the Poisson kernel seen from rho; no trigonometry
         rho = radius / r
-        half = np.tan(np.pi * (rng.random() - 0.5)) * (1.0 - rho) / (1.0 + rho)
-        a = np.arctan2(pos[1], pos[0]) + 2.0 * np.arctan(half)
-        pos[0] = radius * np.cos(a)
-        pos[1] = radius * np.sin(a)
+        direction(rng, 2, scratch)
+        zr, zi = scratch[0] + rho, scratch[1]
+        dr, di = 1.0 + rho * scratch[0], rho * scratch[1]
+        den = dr * dr + di * di
+        wr, wi = (zr * dr + zi * di) / den, (zi * dr - zr * di) / den
+        er, ei = pos[0] / r, pos[1] / r
+        pos[0] = radius * (wr * er - wi * ei)
+        pos[1] = radius * (wr * ei + wi * er)
         return True
     if rng.random() >= radius / r:
         return False
