@@ -1,0 +1,131 @@
+"""Kernel benchmarks: speed, memory and cost scaling, side by side in one run.
+
+Each (model, N) runs in a fresh interpreter so that its peak memory is its
+own; numba compilation is excluded by growing a small cluster first (the
+kernels are cached on disk). The naive baseline (single steps everywhere, a
+kill circle at twice the launch radius) runs at small N beside the exact
+method, so the gain is a ratio measured on the same machine at the same time.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import xarray as xr
+
+MODELS = {
+    "lattice-2d": dict(model="lattice", dim=2),
+    "offlattice-2d": dict(model="offlattice", dim=2),
+    "lattice-3d": dict(model="lattice", dim=3),
+    "offlattice-3d": dict(model="offlattice", dim=3),
+}
+NAIVE = dict(jumps=False, kill_factor=2.0)
+COUNTS = {
+    "lattice-2d": [10_000, 100_000, 1_000_000],
+    "offlattice-2d": [10_000, 100_000, 1_000_000],
+    "lattice-3d": [10_000, 100_000, 1_000_000],
+    "offlattice-3d": [10_000, 100_000],
+}
+NAIVE_COUNTS = [1_000, 3_000]
+
+_PROBE = """
+import json, resource, sys, time
+import dlasweep as dla
+params = json.loads(sys.argv[1]); n = int(sys.argv[2])
+dla.grow(50, seed=0, **params)  # load the compiled kernels
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+t = time.perf_counter(); c = dla.grow(n, seed=1, **params); dt = time.perf_counter() - t
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.steps.sum()),
+                      peak_mb=peak / 1024, added_mb=(peak - base) / 1024)))
+"""
+
+
+def _probe(params: dict, n: int) -> dict:
+    out = subprocess.run(
+        [sys.executable, "-c", _PROBE, json.dumps(params), str(n)],
+        capture_output=True, text=True, check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset:
+    """Time every model at several N; return the measurements as a Dataset.
+
+    Parameters
+    ----------
+    full : bool
+        Add N = 1e7 for the 2D models.
+    quick : bool
+        Only the smallest N of each model (a smoke test).
+    echo : callable
+        Receives one line per measurement as it finishes.
+    """
+    rows = []
+    plan = []
+    for name, params in MODELS.items():
+        counts = COUNTS[name][:1] if quick else COUNTS[name] + ([10_000_000] if full and "2d" in name else [])
+        plan += [(name, "exact", params, n) for n in counts]
+    naive_counts = NAIVE_COUNTS[:1] if quick else NAIVE_COUNTS
+    for n in naive_counts:
+        plan.append(("lattice-2d", "exact", MODELS["lattice-2d"], n))
+        plan.append(("lattice-2d", "naive", {**MODELS["lattice-2d"], **NAIVE}, n))
+    echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'peak MB':>9}{'added MB':>10}")
+    for name, method, params, n in plan:
+        r = _probe(params, n)
+        r.update(model=name, method=method, n=n)
+        rows.append(r)
+        echo(
+            f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
+            f"{r['steps'] / r['n_grown']:>16.1f}{r['peak_mb']:>9.0f}{r['added_mb']:>10.0f}"
+        )
+    ds = _to_dataset(rows)
+    for name in MODELS:
+        exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
+        if exact.sizes["run"] >= 2:
+            slope = np.polyfit(np.log(exact.n.values.astype(float)), np.log(exact.seconds.values), 1)[0]
+            ds.attrs[f"cost_exponent_{name}"] = float(slope)
+            echo(f"{name}: time grows as N^{slope:.2f}")
+    for n in naive_counts:
+        sel = ds.where(ds.n == n, drop=True)
+        t = {str(m): float(s) for m, s in zip(sel.method.values, sel.seconds.values)}
+        ratio = t["naive"] / t["exact"]
+        ds.attrs[f"naive_over_exact_{n}"] = ratio
+        echo(f"lattice-2d N={n}: naive walk takes {ratio:.1f}x the time of the exact-jump kernel")
+    return ds
+
+
+def _to_dataset(rows) -> xr.Dataset:
+    def column(key, dtype=None):
+        return ("run", np.array([r[key] for r in rows], dtype=dtype))
+
+    ds = xr.Dataset(
+        {
+            "seconds": column("seconds", float),
+            "n_grown": column("n_grown", np.int64),
+            "walk_steps": column("steps", np.int64),
+            "peak_memory": column("peak_mb", float),
+            "added_memory": column("added_mb", float),
+        },
+        coords={"model": column("model", str), "method": column("method", str), "n": column("n", np.int64)},
+    )
+    units = dict(seconds="s", n_grown="1", walk_steps="1", peak_memory="MiB", added_memory="MiB", n="1")
+    names = dict(
+        seconds="wall time to grow the cluster, compilation excluded",
+        n_grown="particles attached",
+        walk_steps="walk steps and jumps in all",
+        peak_memory="peak resident memory of the process",
+        added_memory="peak resident memory added by growing the cluster",
+        n="target particle count",
+        model="model and dimension",
+        method="exact jumps or the naive single-step walk with a kill circle",
+    )
+    for key in list(ds.data_vars) + ["n", "model", "method"]:
+        ds[key].attrs["long_name"] = names[key]
+        if key in units:
+            ds[key].attrs["units"] = units[key]
+    ds.attrs["title"] = "dlasweep kernel benchmark"
+    return ds
