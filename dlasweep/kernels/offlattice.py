@@ -4,45 +4,59 @@ Two particles touch when their centres are exactly one diameter apart.
 
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
 uniformly onto the sphere whose radius is a lower bound on its free distance
-(the largest clear level of the hierarchical occupancy maps, refined by the
-walker's place in its map cell, and the bounding circle of the cluster).
-Outside the launch circle it returns exactly (``walk.return_to_sphere``) or,
-above the launch line of a substrate, ``walk.return_to_plane``.
+(the largest clear level of the hierarchical occupancy maps of ``maps``,
+refined by the walker's place in its map cell, and the bounding circle of the
+cluster). Outside the launch circle it returns exactly
+(``walk.return_to_sphere``; above a substrate's launch line,
+``walk.return_to_plane``).
 
 Near the cluster, exact nearest distances come from a cell list (cells of
-side 2, in tiles of 64 cells allocated where particles are, so memory follows
-the cluster) cached as a neighbour list around an anchor point: while the
-walker stays near the anchor, its exact free distance is a minimum over a
-handful of centres. When that free distance drops below ``EPS`` the walker
-moves by ``RAY`` along a uniform direction with an exact ray cast, so it
-stops exactly at contact (centre distance 1 to within rounding, never less)
-and never passes through a branch. The bias of this shell is O(EPS) in the
-contact point. ``step > 0`` replaces the end game by fixed Gaussian steps
-with an end-point overlap check (see ``_gauss_move``).
+side 2 in tiles of 64 cells, allocated only where particles are, so memory
+follows the cluster) cached as a neighbour list around an anchor point: while
+the walker stays near the anchor its exact free distance is a minimum over a
+handful of centres. When the free distance (surface gap) drops below ``EPS``
+the walker moves by ``RAY`` along a uniform direction with an exact ray cast,
+so it stops exactly at contact (centre distance 1 to rounding, never less)
+and never passes through a branch. The contact point is biased by O(EPS).
+
+``step > 0`` replaces the end game by fixed Gaussian steps with an end-point
+overlap check (``_gauss_move``), the naive scheme, kept to show where it
+fails.
 
 Rules where the model table leaves a choice:
 
 * Stickiness: at each contact the walker sticks with probability s; if not,
-  it moves away from the contact by a ray-cast move of length 1 along a
-  uniform direction of the outward half-space (step > 0: it stays at the
-  contact and takes its next Gaussian step from there).
-* Box (size > 0): absorbing walls at +-size/2 (a walker that comes within
-  ``EPS`` of a wall is removed). Circle launch stops with ``boundary`` when
-  the launch circle comes within one diameter of the walls; box launch
-  releases walkers uniformly on the surface one diameter inside the walls
-  and stops with ``boundary`` when a particle comes within one diameter of
-  that surface. ``kill_factor`` is ignored with box launch (the walls kill).
-* Substrate (seed_shape line): centres touch it at up-coordinate 0;
-  periodic sides of width ``size`` (coordinates kept in [0, size)).
-  Circle launch: launch line/plane at height launch_factor*h_max +
-  launch_margin, no ceiling. Box launch: walkers released at height size-1,
-  absorbing ceiling at size, ``boundary`` when h_max >= size - 2.
-* walkers > 1: walkers start uniformly in the box (not overlapping the
-  seed), take single steps in turn (step 1 with a ray cast, or Gaussian),
-  and are removed at the walls; a walker found overlapping a newly attached
-  particle merges into it (is removed).
+  it moves away by a ray-cast move of length ``REJECT`` = 1 along a uniform
+  direction of the outward half-space (step > 0: it stays at the contact and
+  takes its next Gaussian step from there).
+* Box (size > 0): absorbing walls at +-size/2 (a walker within ``EPS`` of a
+  wall is removed). Circle launch stops with ``boundary`` when the launch
+  circle comes within one diameter of the walls; box launch releases walkers
+  uniformly on the surface one diameter inside the walls and stops with
+  ``boundary`` when a particle centre comes within 2 of the walls.
+  ``kill_factor`` is ignored with box launch (the walls kill).
+* Substrate (seed_shape line): centres touch it at up-coordinate 0; periodic
+  sides of width ``size`` (stored coordinates in [0, size)). Circle launch:
+  launch line/plane at launch_factor*h_max + launch_margin, no ceiling. Box
+  launch: walkers released at height size-1, absorbing ceiling at size,
+  ``boundary`` when h_max >= size - 2.
+* walkers > 1: walkers start uniformly in the box (not overlapping the seed),
+  take single steps in turn (length 1 with a ray cast, or Gaussian), and are
+  removed at the walls; a walker found overlapping a newly attached particle
+  merges into it (is removed).
 * step > 0 with jumps: walk-on-spheres while the free distance exceeds
   ``GAUSS_JUMP * step``, fixed Gaussian steps nearer than that.
+
+Random numbers: the numpy Generator passed in seeds a xoshiro256+ stream
+kept in registers for the walk's directions; the Generator itself draws the
+exact returns, stickiness and Gaussian steps. Both are deterministic given
+the Generator, so a cluster is a function of its seed.
+
+Speed note: helpers that take arrays and branch must not be called from the
+hot loop (numba then wraps each call in atomic NRT incref/decref, which cost
+a third of the run time); the hot loop in ``_walk`` therefore spells out the
+map query, the direction draw and the list scans, and calls out only for
+rare events.
 """
 
 import numba
@@ -53,9 +67,7 @@ from . import maps
 from .walk import return_to_plane, return_to_sphere
 
 ijit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", inline="always")
-"""``_jit.jit`` inlined at numba level into its callers: hot helpers that take
-arrays must be inlined, or every call pays atomic NRT incref/decref on each
-array argument (a third of the run time when they were plain calls)."""
+"""``_jit.jit`` inlined at numba level; only for scalar-only helpers."""
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -69,14 +81,71 @@ REJECT = 1.0
 RL = 3.0
 """Radius (centre distance) of the cached neighbour list."""
 LCAP = 1024
-"""Capacity of the neighbour list (a packing of radius RL holds far fewer)."""
+"""Capacity of the neighbour lists (a packing within radius RL holds < 200)."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 LINE_PAD = 32
-"""Periodic images marked in the maps up to this distance (line seed)."""
+"""Periodic images are marked in the maps up to this distance (line seed)."""
 GROW = 1.3
-"""Grid growth factor."""
+"""Growth factor of the grids when the cluster outgrows them."""
 INF = np.inf
+
+
+# ------------------------------------------------------------------ rng -----
+
+
+@ijit
+def _xo(s0, s1, s2, s3):
+    """xoshiro256+ step: new state and a double in [0, 1)."""
+    r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    t = s1 << np.uint64(17)
+    s2 ^= s0
+    s3 ^= s1
+    s1 ^= s2
+    s0 ^= s3
+    s2 ^= t
+    s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
+    return s0, s1, s2, s3, r
+
+
+@ijit
+def _xdir(s0, s1, s2, s3, dim):
+    """Uniform unit vector by rejection from the unit disk (2D: normalise;
+    3D: Marsaglia's map), without sin/cos."""
+    while True:
+        s0, s1, s2, s3, a = _xo(s0, s1, s2, s3)
+        s0, s1, s2, s3, b = _xo(s0, s1, s2, s3)
+        x = 2.0 * a - 1.0
+        y = 2.0 * b - 1.0
+        q = x * x + y * y
+        if 0.0 < q < 1.0:
+            break
+    if dim == 2:
+        inv = 1.0 / np.sqrt(q)
+        return s0, s1, s2, s3, x * inv, y * inv, 0.0
+    f = 2.0 * np.sqrt(1.0 - q)
+    return s0, s1, s2, s3, x * f, y * f, 1.0 - 2.0 * q
+
+
+@jit
+def _rdir(rs, dim, u):
+    """Uniform unit vector into u from the xoshiro state array rs."""
+    s0, s1, s2, s3, u[0], u[1], u[2] = _xdir(rs[0], rs[1], rs[2], rs[3], dim)
+    rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+
+
+@jit
+def _xseed(rng):
+    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded)."""
+    rs = np.zeros(4, np.uint64)
+    z = np.uint64(rng.integers(1, 2**62))
+    for k in range(4):
+        z += np.uint64(0x9E3779B97F4A7C15)
+        x = z
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        rs[k] = x ^ (x >> np.uint64(31))
+    return rs
 
 
 # ---------------------------------------------------------------- grid -----
@@ -89,7 +158,8 @@ INF = np.inf
 
 @jit
 def _layout(dim, line, size, need):
-    """Grid geometry covering a cluster of extent ``need`` (r_max or h_max)."""
+    """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
+    for point seeds, h_max for a substrate), with room to grow."""
     gi = np.zeros(17, np.int64)
     gf = np.zeros(8)
     tb = 3 if dim == 2 else 2
@@ -133,31 +203,18 @@ def _layout(dim, line, size, need):
     return gi, gf
 
 
-@ijit
-def _cell(v, a, gi, gf):
-    c = int(np.floor((v - gf[a]) * gf[3 + a]))
-    if c < 0:
-        c = 0
-    if c >= gi[a]:
-        c = gi[a] - 1
-    return c
-
-
-@ijit
-def _slot(gi, c0, c1, c2):
-    """(tile, cell-within-tile) of index cell (c0, c1, c2)."""
+@jit
+def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
+    """Push particle i on its cell's list; returns heads (grown if needed)."""
+    c0 = min(max(int(np.floor((pts[i, 0] - gf[0]) * gf[3])), 0), gi[0] - 1)
+    c1 = min(max(int(np.floor((pts[i, 1] - gf[1]) * gf[4])), 0), gi[1] - 1)
+    c2 = 0
+    if dim == 3:
+        c2 = min(max(int(np.floor((pts[i, 2] - gf[2]) * gf[5])), 0), gi[2] - 1)
     tb = gi[13]
     m = (1 << tb) - 1
     t = (c0 >> tb) + gi[3] * ((c1 >> tb) + gi[4] * (c2 >> tb))
-    return t, (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
-
-
-@jit
-def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
-    c0 = _cell(pts[i, 0], 0, gi, gf)
-    c1 = _cell(pts[i, 1], 1, gi, gf)
-    c2 = _cell(pts[i, 2], 2, gi, gf) if dim == 3 else 0
-    t, loc = _slot(gi, c0, c1, c2)
+    loc = (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
     tile = dirr[t]
     if tile < 0:
         tile = gi[14]
@@ -177,54 +234,40 @@ def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
 def _mark(i, pts, dim, size, gi, words, start, blocks, cells):
     """Mark particle i in the maps, with its periodic images near the edges."""
     W = gi[9]
-    per = gi[10] == 1
-    reach = 1 if per else 0
+    reach = 1 if gi[10] == 1 else 0
     reach2 = reach if dim == 3 else 0
-    z = pts[i, 2] if dim == 3 else 0.0
     for a in range(-reach, reach + 1):
         for b in range(-reach2, reach2 + 1):
             i0 = int(np.floor(pts[i, 0] + a * size)) + gi[6]
             i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[7]
-            i2 = int(np.floor(z)) + gi[8] if dim == 3 else 0
+            i2 = int(np.floor(pts[i, 2])) + gi[8] if dim == 3 else 0
             if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
                 maps.mark(words, dim, start, blocks, cells, i0, i1, i2)
 
 
 @jit
 def _build_grid(dim, line, size, need, pts, count, nxt):
+    """Maps and cell list for particles 0..count-1, sized for ``need``."""
     gi, gf = _layout(dim, line, size, need)
     words, start, blocks, cells = maps.allocate(dim, gi[9])
     ntiles = gi[3] * gi[4] * gi[5]
     dirr = np.full(ntiles, -1, np.int32)
-    heads = np.full(64 * max(64, min(ntiles, count + 16)), -1, np.int32)
+    heads = np.full(64 * max(64, min(ntiles, count // 4 + 16)), -1, np.int32)
     for i in range(count):
         heads = _insert(i, pts, nxt, dim, gi, gf, dirr, heads)
         _mark(i, pts, dim, size, gi, words, start, blocks, cells)
     return gi, gf, words, start, blocks, cells, dirr, heads
 
 
-@ijit
-def _bit(words, dim, start, blocks, s, i, j, k):
-    """Bit (i, j, k) of map segment s (``maps.test``, inlined)."""
-    nb = blocks[s]
-    if dim == 2:
-        word = start[s] + (i >> 3) + nb * (j >> 3)
-        b = (i & 7) | ((j & 7) << 3)
-    else:
-        word = start[s] + (i >> 2) + nb * ((j >> 2) + nb * (k >> 2))
-        b = (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
-    return (words[word] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
-
-
-@ijit
+@jit
 def _map_dist(w, dim, size, gi, words, start, blocks, cells):
     """Lower bound on the centre distance from w to every particle, from the maps.
 
-    The largest clear level s (bisection, as ``maps.clear_level``) puts every
-    particle outside the 3**dim block of level-s cells around w, so the
-    distance to that block's surface, 2**s plus w's distance to its own
-    cell's faces, bounds it. Returns 0 when the level-1 cell is set (look
-    closer) and -1 when w is off the map.
+    The largest clear level s (bisection) puts every particle outside the
+    3**dim block of level-s cells around w, so the distance to that block's
+    surface, 2**s plus w's distance to its own cell's faces, bounds it.
+    Returns 0 when the level-1 cell is set (look closer), -1 off the map.
+    (``_walk`` spells this out inline.)
     """
     W = gi[9]
     x0 = w[0]
@@ -239,103 +282,84 @@ def _map_dist(w, dim, size, gi, words, start, blocks, cells):
     if not (0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
-    if _bit(words, dim, start, blocks, 1, i0 >> 1, i1 >> 1, i2 >> 1):
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
+    while hi - lo > 1:
+        s = (lo + hi) >> 1
+        j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
+        nb = blocks[s]
+        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+        if (word >> np.uint64((j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs)))) & np.uint64(1):
+            hi = s
+        else:
+            lo = s
+    s = lo
+    if s == 0:
         return 0.0
-    top = min(len(cells) - 1, gi[15])
-    if not _bit(words, dim, start, blocks, top, i0 >> top, i1 >> top, i2 >> top):
-        s = top
-    else:
-        lo, hi = 1, top  # clear at lo, set at hi
-        while hi - lo > 1:
-            mid = (lo + hi) >> 1
-            if _bit(words, dim, start, blocks, mid, i0 >> mid, i1 >> mid, i2 >> mid):
-                hi = mid
-            else:
-                lo = mid
-        s = lo
     side = float(1 << s)
-    lo_ = float((i0 >> s) << s)
-    f = min(X0 - lo_, lo_ + side - X0)
-    lo_ = float((i1 >> s) << s)
-    f = min(f, X1 - lo_, lo_ + side - X1)
+    c = float((i0 >> s) << s)
+    f = min(X0 - c, c + side - X0)
+    c = float((i1 >> s) << s)
+    f = min(f, X1 - c, c + side - X1)
     if dim == 3:
-        lo_ = float((i2 >> s) << s)
-        f = min(f, X2 - lo_, lo_ + side - X2)
+        c = float((i2 >> s) << s)
+        f = min(f, X2 - c, c + side - X2)
     return side + f
 
 
 @ijit
-def _dir(rng, dim, out):
-    """Uniform unit vector into out[:3] (``walk.direction``, inlined)."""
-    if dim == 2:
-        a = 2.0 * np.pi * rng.random()
-        out[0] = np.cos(a)
-        out[1] = np.sin(a)
-        out[2] = 0.0
-        return
-    cz = 2.0 * rng.random() - 1.0
-    a = 2.0 * np.pi * rng.random()
-    sz = np.sqrt(max(0.0, 1.0 - cz * cz))
-    out[0] = sz * np.cos(a)
-    out[1] = sz * np.sin(a)
-    out[2] = cz
+def _span(v, r, nc, periodic, origin, inv):
+    """Index cells covering [v - r, v + r] on one axis (may wrap if periodic)."""
+    lo = int(np.floor((v - r - origin) * inv))
+    hi = int(np.floor((v + r - origin) * inv))
+    if periodic:
+        return lo, min(hi, lo + nc - 1)
+    return max(lo, 0), min(hi, nc - 1)
 
 
-@ijit
-def _crange(v, r, a, gi, gf):
-    """Index cells covering [v - r, v + r] on axis a (may wrap if periodic)."""
-    lo = int(np.floor((v - r - gf[a]) * gf[3 + a]))
-    hi = int(np.floor((v + r - gf[a]) * gf[3 + a]))
-    nc = gi[a]
-    if gi[10 + a] == 1:
-        if hi - lo + 1 > nc:
-            hi = lo + nc - 1
-    else:
-        lo = max(lo, 0)
-        hi = min(hi, nc - 1)
-    return lo, hi
-
-
-@ijit
-def _image(d, per, size):
-    if per:
-        if d > 0.5 * size:
-            d -= size
-        elif d < -0.5 * size:
-            d += size
-    return d
-
-
-@ijit
+@jit
 def _gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
-    """Particles with centres within r of point c, as images nearest to c.
+    """Particles with centres within r of point c, as the images nearest c.
 
     Fills lx, ly, lz (coordinates) and li (indices); returns the count.
     """
     r2 = r * r
     nl = 0
-    lo0, hi0 = _crange(c[0], r, 0, gi, gf)
-    lo1, hi1 = _crange(c[1], r, 1, gi, gf)
+    lo0, hi0 = _span(c[0], r, gi[0], gi[10] == 1, gf[0], gf[3])
+    lo1, hi1 = _span(c[1], r, gi[1], gi[11] == 1, gf[1], gf[4])
     lo2, hi2 = 0, 0
     if dim == 3:
-        lo2, hi2 = _crange(c[2], r, 2, gi, gf)
+        lo2, hi2 = _span(c[2], r, gi[2], False, gf[2], gf[5])
     p0 = gi[10] == 1
     p1 = gi[11] == 1
-    n0, n1 = gi[0], gi[1]
+    n0, n1, t0, t1 = gi[0], gi[1], gi[3], gi[4]
+    tb = gi[13]
+    m = (1 << tb) - 1
+    half = 0.5 * size
     for k2 in range(lo2, hi2 + 1):
         for k1 in range(lo1, hi1 + 1):
             c1 = k1 % n1 if p1 else k1
             for k0 in range(lo0, hi0 + 1):
                 c0 = k0 % n0 if p0 else k0
-                t, loc = _slot(gi, c0, c1, k2)
-                tile = dirr[t]
+                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))]
                 if tile < 0:
                     continue
-                h = heads[tile * 64 + loc]
+                h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))]
                 while h >= 0:
-                    d0 = _image(pts[h, 0] - c[0], p0, size)
-                    d1 = _image(pts[h, 1] - c[1], p1, size)
+                    d0 = pts[h, 0] - c[0]
+                    d1 = pts[h, 1] - c[1]
                     d2 = pts[h, 2] - c[2] if dim == 3 else 0.0
+                    if p0:
+                        if d0 > half:
+                            d0 -= size
+                        elif d0 < -half:
+                            d0 += size
+                    if p1:
+                        if d1 > half:
+                            d1 -= size
+                        elif d1 < -half:
+                            d1 += size
                     if d0 * d0 + d1 * d1 + d2 * d2 < r2 and nl < len(lx):
                         lx[nl] = c[0] + d0
                         ly[nl] = c[1] + d1
@@ -346,11 +370,12 @@ def _gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     return nl
 
 
-@ijit
-def _ray(w, u, length, nl, lx, ly, lz):
-    """First contact along w + t u, 0 <= t <= length, with listed centres: (t, k).
+@jit
+def _ray(w, u, length, nl, lx, ly, lz, line, dim):
+    """First contact along w + t u, 0 <= t <= length: (t, k).
 
-    k indexes the list, or is -1 when nothing is touched.
+    k indexes the listed centres, -2 is the substrate (line seed: centres
+    touch it at up = 0), -1 means no contact.
     """
     best = length
     hit = -1
@@ -371,25 +396,20 @@ def _ray(w, u, length, nl, lx, ly, lz):
         if t <= best:
             best = t
             hit = k
+    if line:
+        up = dim - 1
+        if u[up] < 0.0:
+            t = max(0.0, -w[up] / u[up])
+            if t <= best:
+                best = t
+                hit = -2
     return best, hit
 
 
-@ijit
-def _ray_sub(w, u, dim, best, hit):
-    """Add the substrate (centres touch it at up = 0) to a ray cast."""
-    up = dim - 1
-    if u[up] < 0.0:
-        t = -w[up] / u[up]
-        if t < 0.0:
-            t = 0.0
-        if t <= best:
-            return t, -2
-    return best, hit
-
-
-@ijit
+@jit
 def _settle(w, u, t, hit, dim, lx, ly, lz, normal):
-    """Move to w + t u and put the contact at distance 1 exactly; store the normal."""
+    """Move w to w + t u and put it at distance 1 exactly from what it hit;
+    ``normal`` gets the outward unit normal at the contact."""
     for a in range(3):
         w[a] += t * u[a]
     if hit == -2:
@@ -414,10 +434,10 @@ def _settle(w, u, t, hit, dim, lx, ly, lz, normal):
 def _cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal):
     """Ray cast of w along u straight from the cell list; moves w.
 
-    Long rays are cast in pieces of at most 2 so the gathered lists stay
-    short. Returns True on contact (w then at contact, ``normal`` set).
+    Long rays go in pieces of at most 2 so the gathered lists stay short.
+    Returns True on contact (w then at contact, ``normal`` set).
     """
-    c = np.empty(3)
+    c = normal  # scratch until a contact sets it
     left = length
     while left > 0.0:
         piece = min(left, 2.0)
@@ -425,9 +445,7 @@ def _cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, 
         for a in range(3):
             c[a] = w[a] + 0.5 * piece * u[a]
         nl = _gather(c, 0.5 * piece + 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
-        t, hit = _ray(w, u, piece, nl, lx, ly, lz)
-        if line:
-            t, hit = _ray_sub(w, u, dim, t, hit)
+        t, hit = _ray(w, u, piece, nl, lx, ly, lz, line, dim)
         if hit != -1:
             _settle(w, u, t, hit, dim, lx, ly, lz, normal)
             return True
@@ -442,9 +460,9 @@ def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, w
     """One Gaussian step with the naive end-point check; True on contact.
 
     The step is proposed from w; if its end point is free it is taken, even
-    when the straight path crosses a branch (tunnelling). If it overlaps, the
-    walker is put back along the step to where it first touches one of the
-    particles it overlaps at the end point (exact contact); should that spot
+    when the straight path crosses a branch (tunnelling). If the end point
+    overlaps, the walker is put back along the step to where it first touches
+    one of the particles it overlaps there (exact contact); should that spot
     overlap another particle, a full ray cast along the step decides.
     """
     up = dim - 1
@@ -461,29 +479,332 @@ def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, w
             w[a] = e[a]
         return False
     length = 0.0
-    for a in range(dim):
-        u[a] = e[a] - w[a]
+    for a in range(3):
+        u[a] = e[a] - w[a] if a < dim else 0.0
         length += u[a] * u[a]
     length = np.sqrt(length)
     for a in range(dim):
         u[a] /= length
-    t, hit = _ray(w, u, length * (1.0 + 1e-9) + 1e-12, nov, lx, ly, lz)
-    if sub:
-        t, hit = _ray_sub(w, u, dim, t, hit)
+    t, hit = _ray(w, u, length * (1.0 + 1e-9) + 1e-12, nov, lx, ly, lz, sub, dim)
     if hit != -1:
         p = np.empty(3)
         for a in range(3):
             p[a] = w[a]
         _settle(p, u, t, hit, dim, lx, ly, lz, normal)
-        n_close = _gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
-        if n_close == 0:
+        if _gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li) == 0:
             for a in range(3):
                 w[a] = p[a]
             return True
     return _cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal)
 
 
+@jit
+def _contact(w, u, normal, dim, size, line, stick, rng, rs, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
+    """A walker at contact: sticks with probability ``stick`` (True), else
+    moves away by ``REJECT`` into the outward half-space, ray-cast, and
+    tries again at every new contact. Returns (stuck, moves made)."""
+    moves = 0
+    while True:
+        if stick >= 1.0 or rng.random() < stick:
+            return True, moves
+        _rdir(rs, dim, u)
+        dot = u[0] * normal[0] + u[1] * normal[1] + u[2] * normal[2]
+        if dot < 0.0:
+            for a in range(3):
+                u[a] -= 2.0 * dot * normal[a]
+        moves += 1
+        if not _cast(w, u, REJECT, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal):
+            return False, moves
+
+
 # --------------------------------------------------------------- growth -----
+
+
+@jit
+def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
+          blocks, cells, dirr, heads, geo, ip, fp, cnt, rs, rng):
+    """Release walkers until one sticks (returns 1, w at its place) or the
+    step budget runs out (returns 2).
+
+    Every array is an argument (borrowed, no reference counting) and the hot
+    path calls no array-taking helper; see the module note. ``cnt`` holds
+    the total steps and the steps since the last attachment.
+    """
+    dim, line, size = ip[0], ip[1] == 1, ip[2]
+    launch_box, boxed, ceiling = ip[3] == 1, ip[4] == 1, ip[5] == 1
+    ret, kill, jumps, max_steps = ip[6] == 1, ip[7] == 1, ip[8] == 1, ip[9]
+    R, Rk, hb, sigma, stick = fp[0], fp[1], fp[2], fp[3], fp[4]
+    R2 = R * R
+    RL2 = RL * RL
+    up = dim - 1
+    rmax, cmax, hmax = geo[0], geo[1], geo[2]
+    # map geometry
+    W = float(gi[9])
+    m0, m1, m2 = float(gi[6]), float(gi[7]), float(gi[8])
+    per = gi[10] == 1
+    ftop = min(len(cells) - 1, gi[15]) + 1
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+    total = cnt[0]
+    since = cnt[1]
+    code = 0
+    while code == 0:
+        # ---- release
+        if launch_box:
+            if line:
+                for a in range(up):
+                    w[a] = rng.random() * size
+                w[up] = size - 1.0
+            else:
+                face = int(rng.random() * 2 * dim)
+                for a in range(dim):
+                    w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
+                w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
+        elif line:
+            for a in range(up):
+                w[a] = rng.random() * size
+            w[up] = R
+        else:
+            s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+            w[0] = R * u0
+            w[1] = R * u1
+            w[2] = R * u2
+        list_ok = False
+        nl = 0
+        while True:
+            if max_steps > 0 and total >= max_steps:
+                code = 2
+                break
+            # ---- outer boundaries: exact return, kill sphere, walls
+            if line:
+                h = w[up]
+                if ret and h > R:
+                    return_to_plane(rng, dim, w, R, size)
+                    total += 1
+                    since += 1
+                    list_ok = False
+                    continue
+                gb = INF
+                if kill:
+                    gb = Rk - h
+                if ceiling:
+                    gb = min(gb, size - h)
+                ggeo = h - hmax - 1.0
+            else:
+                r2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+                if ret and r2 > R2 * (1.0 + 1e-12):  # returned walkers sit on R, to rounding
+                    total += 1
+                    since += 1
+                    list_ok = False
+                    if not return_to_sphere(rng, dim, w, R, scratch):
+                        break  # escaped (3D): release a new walker
+                    continue
+                r = np.sqrt(r2)
+                gb = INF
+                if kill:
+                    gb = Rk - r
+                ch = max(abs(w[0]), abs(w[1]), abs(w[2]))
+                if boxed:
+                    gb = min(gb, hb - ch)
+                ggeo = max(r - rmax, ch - cmax) - 1.0
+            if gb < EPS:
+                break  # absorbed: release a new walker
+            # ---- free distance g: a lower bound, exact near the cluster
+            exact = False
+            g = 0.0
+            if list_ok:
+                d0 = w[0] - anchor[0]
+                d1 = w[1] - anchor[1]
+                d2 = w[2] - anchor[2]
+                dout = RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                dl2 = INF
+                for k in range(nl):
+                    d0 = w[0] - lx[k]
+                    d1 = w[1] - ly[k]
+                    d2 = w[2] - lz[k]
+                    dl2 = min(dl2, d0 * d0 + d1 * d1 + d2 * d2)
+                if dout > 0.0 and dl2 <= dout * dout:
+                    g = np.sqrt(dl2) - 1.0
+                    exact = True
+                else:
+                    list_ok = False
+            if not exact:
+                # the maps (as _map_dist, spelled out)
+                x0 = w[0]
+                x1 = w[1]
+                if per:
+                    x0 = x0 - size * np.floor(x0 / size)
+                    w[0] = x0
+                    if dim == 3:
+                        x1 = x1 - size * np.floor(x1 / size)
+                        w[1] = x1
+                X0 = x0 + m0
+                X1 = x1 + m1
+                X2 = w[2] + m2 if dim == 3 else 0.0
+                dm = -1.0
+                if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
+                    i0, i1, i2 = int(X0), int(X1), int(X2)
+                    lo, hi = 0, ftop
+                    while hi - lo > 1:
+                        s = (lo + hi) >> 1
+                        j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
+                        nb = blocks[s]
+                        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+                        bit = (j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs))
+                        if (word >> np.uint64(bit)) & np.uint64(1):
+                            hi = s
+                        else:
+                            lo = s
+                    if lo == 0:
+                        dm = 0.0
+                    else:
+                        side = float(1 << lo)
+                        c = float((i0 >> lo) << lo)
+                        f = min(X0 - c, c + side - X0)
+                        c = float((i1 >> lo) << lo)
+                        f = min(f, X1 - c, c + side - X1)
+                        if dim == 3:
+                            c = float((i2 >> lo) << lo)
+                            f = min(f, X2 - c, c + side - X2)
+                        dm = side + f
+                if dm > 0.0:
+                    g = max(ggeo, dm - 1.0)
+                elif dm < 0.0:
+                    g = ggeo
+                else:
+                    anchor[0] = w[0]
+                    anchor[1] = w[1]
+                    anchor[2] = w[2]
+                    nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+                    list_ok = True
+                    dl2 = INF
+                    for k in range(nl):
+                        d0 = w[0] - lx[k]
+                        d1 = w[1] - ly[k]
+                        d2 = w[2] - lz[k]
+                        dl2 = min(dl2, d0 * d0 + d1 * d1 + d2 * d2)
+                    g = (np.sqrt(dl2) if dl2 < RL2 else RL) - 1.0
+            if line:
+                g = min(g, w[up])
+            g = min(g, gb)
+            # ---- move
+            if sigma == 0.0 and jumps and g >= EPS:
+                s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                w[0] += g * u0
+                w[1] += g * u1
+                w[2] += g * u2
+                total += 1
+                since += 1
+                continue
+            contact = False
+            if sigma == 0.0 and jumps:
+                # inside the shell: a short exact ray cast against the list
+                d0 = w[0] - anchor[0]
+                d1 = w[1] - anchor[1]
+                d2 = w[2] - anchor[2]
+                if not list_ok or RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) < 1.0 + RAY + 1e-9:
+                    anchor[0] = w[0]
+                    anchor[1] = w[1]
+                    anchor[2] = w[2]
+                    nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+                    list_ok = True
+                s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                total += 1
+                since += 1
+                best = RAY
+                hit = -1
+                for k in range(nl):
+                    d0 = w[0] - lx[k]
+                    d1 = w[1] - ly[k]
+                    d2 = w[2] - lz[k]
+                    b = u0 * d0 + u1 * d1 + u2 * d2
+                    if b >= 0.0:
+                        continue
+                    cc = d0 * d0 + d1 * d1 + d2 * d2 - 1.0
+                    disc = b * b - cc
+                    if disc < 0.0:
+                        continue
+                    t = max(0.0, cc / (np.sqrt(disc) - b))
+                    if t <= best:
+                        best = t
+                        hit = k
+                uu = u2 if dim == 3 else u1
+                if line and uu < 0.0:
+                    t = max(0.0, -w[up] / uu)
+                    if t <= best:
+                        best = t
+                        hit = -2
+                w[0] += best * u0
+                w[1] += best * u1
+                w[2] += best * u2
+                if hit == -1:
+                    continue
+                if hit == -2:
+                    w[up] = 0.0
+                    normal[0] = 0.0
+                    normal[1] = 0.0
+                    normal[2] = 0.0
+                    normal[up] = 1.0
+                else:
+                    d0 = w[0] - lx[hit]
+                    d1 = w[1] - ly[hit]
+                    d2 = w[2] - lz[hit]
+                    r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                    normal[0] = d0 / r
+                    normal[1] = d1 / r
+                    normal[2] = d2 / r
+                    w[0] = lx[hit] + normal[0]
+                    w[1] = ly[hit] + normal[1]
+                    w[2] = lz[hit] + normal[2]
+                contact = True
+            elif sigma == 0.0:
+                # single unit steps everywhere (jumps=false)
+                s0, s1, s2, s3, u[0], u[1], u[2] = _xdir(s0, s1, s2, s3, dim)
+                total += 1
+                since += 1
+                if g > 1.0:
+                    for a in range(3):
+                        w[a] += u[a]
+                    continue
+                contact = _cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
+            else:
+                if jumps and g > GAUSS_JUMP * sigma:
+                    s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                    w[0] += g * u0
+                    w[1] += g * u1
+                    w[2] += g * u2
+                    total += 1
+                    since += 1
+                    continue
+                total += 1
+                since += 1
+                list_ok = False
+                if _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
+                               blocks, cells, mx, my, mz, mi, scratch, u, normal):
+                    if stick >= 1.0 or rng.random() < stick:
+                        code = 1
+                        break
+                continue
+            if not contact:
+                continue
+            if stick >= 1.0:
+                code = 1
+                break
+            rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+            stuck, moves = _contact(w, u, normal, dim, size, line, stick, rng, rs, pts, nxt, gi, gf, dirr, heads,
+                                    mx, my, mz, mi)
+            s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+            total += moves
+            since += moves
+            list_ok = False
+            if stuck:
+                code = 1
+                break
+    rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+    cnt[0] = total
+    cnt[1] = since
+    return code
 
 
 @jit
@@ -518,7 +839,6 @@ def _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid):
 @jit
 def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_steps, stick, marks, rng):
     t0 = clock()
-    up = dim - 1
     line = shape == LINE
     nm = len(marks)
     times = np.full(nm, np.nan)
@@ -539,14 +859,16 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
             geo[1] = max(geo[1], abs(pts[q, a]))
         geo[0] = max(geo[0], np.sqrt(r2))
     grid = _build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt)
+    rs = _xseed(rng)
     km = 0
     while km < nm and marks[km] <= count:
         times[km] = clock() - t0
         km += 1
-
+    if nwalk > 1:
+        return _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs, t0, times, km,
+                         pts, steps, nxt, count, geo, grid)
     w = np.zeros(3)
     u = np.zeros(3)
-    e = np.zeros(3)
     normal = np.zeros(3)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
@@ -558,22 +880,15 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
     my = np.empty(LCAP)
     mz = np.zeros(LCAP)
     mi = np.empty(LCAP, np.int64)
-    total = np.int64(0)
-    since = np.int64(0)
-    status = OK
     hb = 0.5 * size
     boxed = size > 0 and not line
-    ceiling = line and launch_box
     ret = kf == 0.0 and not launch_box and (line or size == 0)
     kill = kf > 0.0 and not launch_box
-    RL2 = RL * RL
-
-    if nwalk > 1:
-        return _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, t0, times, km,
-                         pts, steps, nxt, count, geo, grid)
-
+    ip = np.array([dim, line, size, launch_box, boxed, line and launch_box, ret, kill, jumps, max_steps], np.int64)
+    fp = np.array([0.0, 0.0, hb, sigma, stick])
+    cnt = np.zeros(2, np.int64)
+    status = OK
     while count < n:
-        # one walker, from release to attachment or removal
         R = lf * (max(geo[2], 0.0) if line else geo[0]) + lm
         if launch_box:
             if (line and geo[2] >= size - 2.0) or (not line and geo[1] >= hb - 2.0):
@@ -582,198 +897,24 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
         elif boxed and R > hb - 1.0:
             status = BOUNDARY
             break
-        R2 = R * R
-        Rk = kf * R
+        fp[0] = R
+        fp[1] = kf * R
         gi, gf, words, start, blocks, cells, dirr, heads = grid
-        if launch_box:
-            if line:
-                for a in range(up):
-                    w[a] = rng.random() * size
-                w[up] = size - 1.0
-            else:
-                face = int(rng.random() * 2 * dim)
-                for a in range(dim):
-                    w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
-                w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
-        elif line:
-            for a in range(up):
-                w[a] = rng.random() * size
-            w[up] = R
-        else:
-            _dir(rng, dim, u)
-            for a in range(3):
-                w[a] = R * u[a]
-        list_ok = False
-        nl = 0
-        stuck = False
-        while True:
-            if max_steps > 0 and total >= max_steps:
-                status = STEP_LIMIT
-                break
-            # ---- outer boundaries: exact return, kill sphere, walls
-            if line:
-                h = w[up]
-                if ret and h > R:
-                    return_to_plane(rng, dim, w, R, size)
-                    total += 1
-                    since += 1
-                    list_ok = False
-                    continue
-                gb = INF
-                if kill:
-                    gb = Rk - h
-                if ceiling:
-                    gb = min(gb, size - h)
-                ggeo = h - geo[2] - 1.0
-            else:
-                r2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-                if ret and r2 > R2 * (1.0 + 1e-12):  # returned walkers sit on R, to rounding
-                    total += 1
-                    since += 1
-                    list_ok = False
-                    if not return_to_sphere(rng, dim, w, R, scratch):
-                        break  # escaped (3D): release a new walker
-                    continue
-                r = np.sqrt(r2)
-                gb = INF
-                if kill:
-                    gb = Rk - r
-                ch = max(abs(w[0]), abs(w[1]), abs(w[2]))
-                if boxed:
-                    gb = min(gb, hb - ch)
-                ggeo = max(r - geo[0], ch - geo[1]) - 1.0
-            if gb < EPS:
-                break  # absorbed: release a new walker
-            # ---- free distance g (a lower bound; exact near the cluster)
-            exact = False
-            g = 0.0
-            if list_ok:
-                d0 = w[0] - anchor[0]
-                d1 = w[1] - anchor[1]
-                d2 = w[2] - anchor[2]
-                dout = RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                dl2 = INF
-                for k in range(nl):
-                    d0 = w[0] - lx[k]
-                    d1 = w[1] - ly[k]
-                    d2 = w[2] - lz[k]
-                    dl2 = min(dl2, d0 * d0 + d1 * d1 + d2 * d2)
-                if dout > 0.0 and dl2 <= dout * dout:
-                    g = np.sqrt(dl2) - 1.0
-                    exact = True
-                else:
-                    list_ok = False
-            if not exact:
-                if line:
-                    for a in range(up):
-                        w[a] = w[a] - size * np.floor(w[a] / size)
-                dm = _map_dist(w, dim, size, gi, words, start, blocks, cells)
-                if dm > 0.0:
-                    g = max(ggeo, dm - 1.0)
-                elif dm < 0.0:
-                    g = ggeo
-                else:
-                    for a in range(3):
-                        anchor[a] = w[a]
-                    nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
-                    list_ok = True
-                    dl2 = INF
-                    for k in range(nl):
-                        d0 = w[0] - lx[k]
-                        d1 = w[1] - ly[k]
-                        d2 = w[2] - lz[k]
-                        dl2 = min(dl2, d0 * d0 + d1 * d1 + d2 * d2)
-                    g = (np.sqrt(dl2) if dl2 < RL2 else RL) - 1.0
-            if line:
-                g = min(g, w[up])
-            g = min(g, gb)
-            # ---- move
-            contact = False
-            if sigma == 0.0:
-                if jumps and g >= EPS:
-                    _dir(rng, dim, u)
-                    for a in range(3):
-                        w[a] += g * u[a]
-                    total += 1
-                    since += 1
-                    continue
-                if jumps:
-                    # inside the shell: short exact ray casts against the list
-                    d0 = w[0] - anchor[0]
-                    d1 = w[1] - anchor[1]
-                    d2 = w[2] - anchor[2]
-                    if not list_ok or RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) < 1.0 + RAY + 1e-9:
-                        for a in range(3):
-                            anchor[a] = w[a]
-                        nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
-                        list_ok = True
-                    _dir(rng, dim, u)
-                    total += 1
-                    since += 1
-                    t, hit = _ray(w, u, RAY, nl, lx, ly, lz)
-                    if line:
-                        t, hit = _ray_sub(w, u, dim, t, hit)
-                    if hit == -1:
-                        for a in range(3):
-                            w[a] += RAY * u[a]
-                        continue
-                    _settle(w, u, t, hit, dim, lx, ly, lz, normal)
-                    contact = True
-                else:
-                    _dir(rng, dim, u)
-                    total += 1
-                    since += 1
-                    if g > 1.0:
-                        for a in range(3):
-                            w[a] += u[a]
-                        continue
-                    contact = _cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
-                    if not contact:
-                        continue
-                while contact:
-                    if stick >= 1.0 or rng.random() < stick:
-                        stuck = True
-                        break
-                    _dir(rng, dim, u)
-                    dot = u[0] * normal[0] + u[1] * normal[1] + u[2] * normal[2]
-                    if dot < 0.0:
-                        for a in range(3):
-                            u[a] -= 2.0 * dot * normal[a]
-                    total += 1
-                    since += 1
-                    list_ok = False
-                    contact = _cast(w, u, REJECT, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
-                if stuck:
-                    break
-            else:
-                if jumps and g > GAUSS_JUMP * sigma:
-                    _dir(rng, dim, u)
-                    for a in range(3):
-                        w[a] += g * u[a]
-                    total += 1
-                    since += 1
-                    continue
-                total += 1
-                since += 1
-                list_ok = False
-                if _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
-                               blocks, cells, mx, my, mz, mi, e, u, normal):
-                    if stick >= 1.0 or rng.random() < stick:
-                        stuck = True
-                        break
-        if status != OK:
+        code = _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
+                     blocks, cells, dirr, heads, geo, ip, fp, cnt, rs, rng)
+        if code == 2:
+            status = STEP_LIMIT
             break
-        if stuck:
-            count, grid = _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid)
-            since = 0
-            while km < nm and marks[km] <= count:
-                times[km] = clock() - t0
-                km += 1
+        count, grid = _attach(w, count, cnt[1], pts, steps, nxt, geo, dim, line, size, grid)
+        cnt[1] = 0
+        while km < nm and marks[km] <= count:
+            times[km] = clock() - t0
+            km += 1
     return pts, steps, count, status, times
 
 
 @jit
-def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, t0, times, km,
+def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs, t0, times, km,
               pts, steps, nxt, count, geo, grid):
     """Finite concentration: ``nwalk`` walkers start uniformly in the box and
     take single steps in turn; none is relaunched."""
@@ -824,7 +965,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, t0
             total += 1
             since += 1
             if sigma == 0.0:
-                _dir(rng, dim, u)
+                _rdir(rs, dim, u)
                 if dm > 2.0:
                     for a in range(3):
                         w[a] += u[a]
@@ -835,20 +976,14 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, t0
                 contact = _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
                                       blocks, cells, mx, my, mz, mi, e, u, normal)
             stuck = False
-            while contact:
-                if stick >= 1.0 or rng.random() < stick:
-                    stuck = True
-                    break
+            if contact:
                 if sigma > 0.0:
-                    break
-                _dir(rng, dim, u)
-                dot = u[0] * normal[0] + u[1] * normal[1] + u[2] * normal[2]
-                if dot < 0.0:
-                    for a in range(3):
-                        u[a] -= 2.0 * dot * normal[a]
-                total += 1
-                since += 1
-                contact = _cast(w, u, REJECT, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
+                    stuck = stick >= 1.0 or rng.random() < stick
+                else:
+                    stuck, moves = _contact(w, u, normal, dim, size, line, stick, rng, rs, pts, nxt, gi, gf, dirr,
+                                            heads, mx, my, mz, mi)
+                    total += moves
+                    since += moves
             if stuck:
                 count, grid = _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid)
                 gi, gf, words, start, blocks, cells, dirr, heads = grid

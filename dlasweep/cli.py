@@ -1,0 +1,207 @@
+"""The ``dlasweep`` command: grow, sweep, report, bench.
+
+Exit status: 0 success, 2 bad input (one line naming the bad key or value,
+nothing written), 1 failure at run time. Every input is checked, output
+folders included, before any work starts. This is the only module that
+knows ``argv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+from pathlib import Path
+
+from . import __version__, store
+from . import params as _params
+from .grow import grow
+from .report import report
+from .spec import SpecError, load_spec
+from .sweep import ResumeError, run_sweep
+
+GROW_SUFFIXES = (".nc", ".png", ".svg")
+
+
+class UsageError(ValueError):
+    """A bad command line; the message names the option."""
+
+
+class Unavailable(RuntimeError):
+    """A feature this installation lacks; a run-time failure without a traceback."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that raises instead of printing usage and exiting."""
+
+    def error(self, message):
+        raise UsageError(message)
+
+
+def main(argv=None) -> int:
+    """Run the command line; return the exit status."""
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    command = "dlasweep"
+    try:
+        if argv[:1] == ["bench"]:
+            command = "dlasweep bench"
+            return _bench(argv[1:])
+        args = _parser().parse_args(argv)
+        command = f"dlasweep {args.command}"
+        return args.handler(args)
+    except SystemExit as done:  # --help, --version
+        return int(done.code or 0)
+    except KeyboardInterrupt:
+        kept = "; finished tasks are kept, continue with --resume" if command == "dlasweep sweep" else ""
+        _say(f"{command}: interrupted{kept}")
+        return 130
+    except (UsageError, SpecError, store.StoreError, ResumeError) as err:
+        _say(f"{command}: {_one_line(err)}")
+        return 2
+    except Exception as err:
+        if not isinstance(err, (OSError, TimeoutError, Unavailable)):
+            traceback.print_exc()  # a bug: show where
+        _say(f"{command}: failed: {type(err).__name__}: {_one_line(err)}")
+        return 1
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="dlasweep", description="Parameter sweeps of diffusion-limited aggregation.",
+                     allow_abbrev=False)
+    parser.add_argument("--version", action="version", version=f"dlasweep {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    grow = commands.add_parser("grow", allow_abbrev=False, help="grow one cluster and save it (.nc) or draw it (.png, .svg)")
+    grow.add_argument("-n", type=int, required=True, help="number of particles")
+    grow.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    for name, default in _params.DEFAULTS.items():
+        flags = dict.fromkeys([f"--{name}", f"--{name.replace('_', '-')}"])
+        grow.add_argument(*flags, dest=name, metavar="V", help=f"model parameter (default {default!r})")
+    grow.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
+    grow.set_defaults(handler=_grow)
+
+    sweep = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
+    sweep.add_argument("spec", type=Path, help="sweep spec, e.g. workflows/quick.toml")
+    sweep.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
+    where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
+    sweep.add_argument("--workers", type=int, metavar="K", help="processes of the embedded dask cluster")
+    sweep.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
+    sweep.set_defaults(handler=_sweep)
+
+    report = commands.add_parser("report", allow_abbrev=False, help="tables and plots from a sweep's netCDF file")
+    report.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
+    report.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
+    report.set_defaults(handler=_report)
+
+    commands.add_parser("bench", add_help=False, help="speed and accuracy benchmarks (see `dlasweep bench -h`)")
+    return parser
+
+
+def _grow(args) -> int:
+    out = args.output
+    if out.suffix.lower() not in GROW_SUFFIXES:
+        raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
+    _check_writable(out)
+    if args.n < 1:
+        raise UsageError(f"-n: {args.n} is below 1")
+    if args.seed < 0:
+        raise UsageError(f"--seed: {args.seed} is negative")
+    try:
+        given = {k: _params.coerce(k, getattr(args, k)) for k in _params.DEFAULTS if getattr(args, k) is not None}
+        _params.resolve(**given)
+    except ValueError as err:
+        raise UsageError(f"--{err}") from None
+    draw = None
+    if out.suffix.lower() != ".nc":
+        try:
+            from .report import draw_cluster as draw
+        except ImportError:
+            raise Unavailable(f"{out.suffix} output needs report.draw_cluster, which this version lacks") from None
+
+    cluster = grow(args.n, args.seed, **given)
+    if cluster.status != "ok":
+        _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
+    if draw is None:
+        store.save(store.cluster_dataset(cluster, args.seed), out)
+    else:
+        draw(cluster.points, cluster.params, out)
+    print(f"{out}: {cluster.n} particles")
+    return 0
+
+
+def _sweep(args) -> int:
+    spec = load_spec(args.spec)
+    out = args.output or Path(args.spec.stem + ".nc")
+    if out.suffix != ".nc":
+        raise UsageError(f"-o {out}: expected a file ending in .nc")
+    _check_writable(out)
+    if args.workers is not None:
+        if args.workers < 1:
+            raise UsageError(f"--workers: {args.workers} is below 1")
+        if args.scheduler or args.scheduler_file:
+            raise UsageError("--workers: applies to the embedded cluster only, not with --scheduler")
+    if args.scheduler_file and not args.scheduler_file.is_file():
+        raise UsageError(f"--scheduler-file {args.scheduler_file}: no such file")
+
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        # Failed tasks are reported below, once.
+        warnings.simplefilter("ignore", RuntimeWarning)
+        ds = run_sweep(spec, client=args.scheduler, out=out, resume=args.resume,
+                       workers=args.workers, scheduler_file=args.scheduler_file)
+    failed = ds.attrs.get("failed_tasks")
+    ds.close()
+    if failed:
+        _say(f"dlasweep sweep: {out} written, but tasks failed: {failed}")
+        return 1
+    print(f"{out}: {ds.sizes['cluster']} clusters in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+def _report(args) -> int:
+    outdir = args.output or args.dataset.with_suffix("")
+    _check_writable(outdir, folder=True)
+    ds = store.open_sweep(args.dataset)
+    try:
+        report(ds, outdir)
+    finally:
+        ds.close()
+    print(f"{outdir}: report written")
+    return 0
+
+
+def _bench(argv) -> int:
+    """``dlasweep bench ARGS...`` is ``dlasweep.bench.main(ARGS)``, which parses its own options."""
+    try:
+        from .bench import main as bench_main
+    except ImportError as err:
+        raise Unavailable(f"not available ({err})") from None
+    return bench_main(argv)
+
+
+def _check_writable(path: Path, folder=False):
+    """Refuse, before any work, a target we could not write (``folder``: a folder to fill)."""
+    if path.exists() and path.is_dir() != folder:
+        raise UsageError(f"-o {path}: " + ("exists and is not a folder" if folder else "is a folder"))
+    parent = path if folder and path.is_dir() else path.parent
+    if not parent.is_dir():
+        raise UsageError(f"-o {path}: folder {parent} does not exist")
+    try:
+        # A real attempt: permission bits say nothing for root or a read-only mount.
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError:
+        raise UsageError(f"-o {path}: folder {parent} is not writable") from None
+
+
+def _say(line: str):
+    print(line, file=sys.stderr)
+
+
+def _one_line(err) -> str:
+    return " ".join(str(err).split()) or type(err).__name__

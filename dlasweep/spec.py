@@ -1,0 +1,284 @@
+"""Sweep specifications: a TOML file parsed, typed and validated up front.
+
+A spec names a grid of tasks: every combination of the list-valued model
+parameters (the sweep axes, in spec order), the box sizes and the seeds. Each
+task grows one cluster to the largest particle count. Every combination is
+checked with ``params.resolve`` before anything runs, so a bad value is
+reported at once, naming its key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import numbers
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import __version__
+from . import params as _params
+
+MAX_PARTICLES = 100_000_000
+"""Largest particle count a spec may ask for (a guard against typos like 1e12)."""
+
+_SECTIONS = ("grid", "model", "run")
+_TOP_KEYS = ("name",)
+_GRID_KEYS = ("size", "n_particles", "seeds")
+_RUN_KEYS = ("root_seed", "workers")
+
+
+class SpecError(ValueError):
+    """A spec that cannot run; the message is one line naming the key."""
+
+
+@dataclass(frozen=True)
+class Task:
+    """One cluster to grow: a point of the sweep grid.
+
+    Attributes
+    ----------
+    index : tuple of int
+        Position on the grid: one index per sweep axis, then size, then seed.
+    params : dict
+        Every model parameter, resolved (``params.resolve``), for ``grow``.
+    seed : int
+        The replicate number (the seed coordinate).
+    """
+
+    index: tuple
+    params: dict
+    seed: int
+
+    @property
+    def key(self) -> str:
+        """Name of the task, unique in its sweep, safe as a file name."""
+        return "task-" + "-".join(map(str, self.index))
+
+    @property
+    def spawn_key(self) -> tuple:
+        """Grid indices for ``SeedSequence``; the seed part is the replicate number.
+
+        With ``seeds = N`` the replicate number equals its index; with a list
+        of seeds it makes a replicate name the same stream in any spec.
+        """
+        return self.index[:-1] + (self.seed,)
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A validated sweep specification.
+
+    Attributes
+    ----------
+    name : str
+        Short name (the ``name`` key, else the file's stem).
+    sizes, counts, seeds : tuple of int
+        Box sides (0 = unbounded), particle counts (ascending), replicates.
+    fixed : dict
+        Scalar model parameters as written in the spec.
+    axes : dict
+        Swept model parameters (name -> tuple of values), in spec order.
+    root_seed : int
+        Root of every task's random stream.
+    workers : int or None
+        Preferred number of local workers (``[run] workers``).
+    text : str
+        The spec file as written.
+    """
+
+    name: str
+    sizes: tuple
+    counts: tuple
+    seeds: tuple
+    fixed: dict
+    axes: dict
+    root_seed: int
+    workers: int | None
+    text: str
+
+    @property
+    def shape(self) -> tuple:
+        """Task grid shape: the sweep axes, then sizes, then seeds."""
+        return tuple(len(v) for v in self.axes.values()) + (len(self.sizes), len(self.seeds))
+
+    def configurations(self):
+        """Yield the swept values and size of each grid point, seeds aside, in C order."""
+        names = [*self.axes, "size"]
+        for values in itertools.product(*self.axes.values(), self.sizes):
+            yield dict(zip(names, values))
+
+    def tasks(self):
+        """Yield every ``Task`` in grid (C) order."""
+        indices = itertools.product(*(range(n) for n in self.shape[:-1]))
+        for index, config in zip(indices, self.configurations()):
+            params = _params.resolve(**self.fixed, **config)
+            for j, seed in enumerate(self.seeds):
+                yield Task(index + (j,), params, seed)
+
+    @property
+    def n_tasks(self) -> int:
+        return math.prod(self.shape)
+
+    def identity(self) -> dict:
+        """Everything the science results depend on, as plain JSON types."""
+        return {
+            "grid.size": list(self.sizes),
+            "grid.n_particles": list(self.counts),
+            "grid.seeds": list(self.seeds),
+            **{f"model.{k}": v for k, v in self.fixed.items()},
+            **{f"model.{k}": list(v) for k, v in self.axes.items()},
+            "model (axis order)": list(self.axes),
+            "run.root_seed": self.root_seed,
+            "dlasweep version": __version__,
+        }
+
+    def digest(self) -> str:
+        """SHA-256 of ``identity()``: equal digests give equal results."""
+        text = json.dumps(self.identity(), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def resolved(self, name: str):
+        """Value of a non-swept model parameter after ``params.resolve``.
+
+        Falls back to the spec's value when resolution depends on a sweep
+        axis (``neighbours = 0`` with ``dim`` swept).
+        """
+        values = {_params.resolve(**self.fixed, **c)[name] for c in self.configurations()}
+        if len(values) == 1:
+            return values.pop()
+        return self.fixed.get(name, _params.DEFAULTS[name])
+
+
+def differences(old: dict, new: dict) -> list:
+    """Lines ``key: old -> new`` for every key where two identities differ."""
+    keys = sorted(set(old) | set(new))
+    return [f"{k}: {old.get(k, '(unset)')!r} -> {new.get(k, '(unset)')!r}"
+            for k in keys if old.get(k) != new.get(k)]
+
+
+def load_spec(path) -> Spec:
+    """Read and validate a sweep spec.
+
+    Parameters
+    ----------
+    path : str or Path
+        A TOML file (see DESIGN.md, "Sweep spec").
+
+    Returns
+    -------
+    Spec
+
+    Raises
+    ------
+    SpecError
+        On a missing or unreadable file, TOML syntax, an unknown key, a wrong
+        type or an invalid value; the message names the key.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise SpecError(f"{path}: cannot read spec ({err.__class__.__name__}: {err})") from None
+    return parse_spec(text, default_name=path.stem)
+
+
+def parse_spec(text: str, default_name: str = "sweep") -> Spec:
+    """Validate spec ``text`` (the body of ``load_spec``)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SpecError(f"TOML syntax: {err}") from None
+    _reject_unknown("", doc, _TOP_KEYS + _SECTIONS)
+    for section in _SECTIONS:
+        if not isinstance(doc.get(section, {}), dict):
+            raise SpecError(f"{section}: expected a [{section}] table")
+    grid, model, run = (doc.get(s, {}) for s in _SECTIONS)
+    _reject_unknown("grid.", grid, _GRID_KEYS)
+    _reject_unknown("run.", run, _RUN_KEYS)
+    name = doc.get("name", default_name)
+    if not isinstance(name, str) or not name.strip():
+        raise SpecError(f"name: expected a non-empty string, got {name!r}")
+
+    if "n_particles" not in grid:
+        raise SpecError("grid.n_particles: missing (the particle counts to measure at)")
+    counts = sorted(_int_list("grid.n_particles", grid["n_particles"], 1, MAX_PARTICLES))
+    sizes = _int_list("grid.size", grid.get("size", [0]), 0, None)
+    seeds = grid.get("seeds", 1)
+    if isinstance(seeds, list):
+        seeds = _int_list("grid.seeds", seeds, 0, None)
+    else:
+        seeds = list(range(_integer("grid.seeds", seeds, 1, None)))
+
+    fixed, axes = {}, {}
+    for key, value in model.items():
+        if key not in _params.DEFAULTS:
+            raise SpecError(f"model.{key}: unknown model parameter (known: {', '.join(_params.DEFAULTS)})")
+        if key == "size":
+            raise SpecError("model.size: box sizes belong in grid.size")
+        if isinstance(value, list):
+            if not value:
+                raise SpecError(f"model.{key}: empty list")
+            _unique(f"model.{key}", value)
+            axes[key] = tuple(value)
+        else:
+            fixed[key] = value
+
+    root_seed = _integer("run.root_seed", run.get("root_seed", 0), 0, None)
+    workers = run.get("workers")
+    if workers is not None:
+        workers = _integer("run.workers", workers, 1, None)
+
+    spec = Spec(name.strip(), tuple(sizes), tuple(counts), tuple(seeds), fixed, axes,
+                root_seed, workers, text)
+    _check_grid(spec)
+    return spec
+
+
+def _reject_unknown(prefix, table, known):
+    for key in table:
+        if key not in known:
+            raise SpecError(f"{prefix}{key}: unknown key (known: {', '.join(known)})")
+
+
+def _integer(key, value, low, high):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise SpecError(f"{key}: expected an integer, got {value!r}")
+    if value < low or (high is not None and value > high):
+        bound = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise SpecError(f"{key}: {value} is not {bound}")
+    return int(value)
+
+
+def _int_list(key, value, low, high):
+    """A non-empty list of distinct integers (a bare integer counts as a list of one)."""
+    values = value if isinstance(value, list) else [value]
+    if not values:
+        raise SpecError(f"{key}: empty list")
+    values = [_integer(key, v, low, high) for v in values]
+    _unique(key, values)
+    return values
+
+
+def _unique(key, values):
+    seen = []
+    for v in values:
+        # Compare with types so that true and 1 stay distinct.
+        if any(type(v) is type(s) and v == s for s in seen):
+            raise SpecError(f"{key}: {v!r} appears twice")
+        seen.append(v)
+
+
+def _check_grid(spec: Spec):
+    """Resolve every grid point's parameters; the first failure names its key."""
+    for config in spec.configurations():
+        try:
+            _params.resolve(**spec.fixed, **config)
+        except ValueError as err:
+            message = str(err)
+            section = "grid" if message.startswith("size:") else "model"
+            where = ", ".join(f"{k}={v!r}" for k, v in config.items())
+            context = f" (at {where})" if len(config) > 1 or len(spec.sizes) > 1 else ""
+            raise SpecError(f"{section}.{message}{context}") from None

@@ -1,0 +1,348 @@
+"""Run a sweep on dask: one task per cluster, each result saved as it arrives.
+
+Every task grows one (swept params, size, seed) cluster once, to the largest
+particle count, and measures each count as a prefix. Its random stream is
+``SeedSequence(root_seed, spawn_key=grid indices)``, so results do not depend
+on how many workers there are or in which order tasks finish.
+
+Finished tasks go at once to ``OUT.parts/<task key>.npz`` (written under a
+temporary name, then renamed). ``resume=True`` keeps the parts that are there
+and computes the rest; ``OUT.parts/manifest.json`` records the spec's
+identity so that a changed spec is refused. At the end the dataset is
+assembled from the parts in one pass, the clusters through flat files that
+are mapped, not loaded, so memory holds one cluster at a time. This is the
+only module that knows dask.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import json
+import logging
+import os
+import shutil
+import sys
+import tempfile
+import time
+import uuid
+import warnings
+from pathlib import Path
+
+import numpy as np
+from distributed import Client, LocalCluster, as_completed
+from tqdm import tqdm
+
+from . import measure, store
+from .grow import grow
+from .params import STATUSES
+from .spec import Spec, differences, load_spec
+
+MANIFEST = "manifest.json"
+
+
+class ResumeError(ValueError):
+    """The parts folder does not fit this run (changed spec, or no --resume)."""
+
+
+def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
+              scheduler_file=None):
+    """Grow and measure every cluster of a spec.
+
+    Parameters
+    ----------
+    spec : Spec or path
+        A spec from ``load_spec``, or the path of one.
+    client : distributed.Client or str, optional
+        A connected client, or a scheduler address. Default: an embedded
+        ``LocalCluster`` with one single-threaded process per core.
+    out : path, optional
+        The netCDF file to write; its ``.parts`` folder keeps finished tasks
+        until the file is complete. Without it, results stay in memory.
+    resume : bool
+        Reuse the parts of an interrupted run of the same spec.
+    workers : int, optional
+        Processes of the embedded cluster (default: ``[run] workers``, else
+        the usable cores).
+    progress : bool, optional
+        Show a progress bar (default: when stderr is a terminal).
+    scheduler_file : path, optional
+        Connect to the scheduler described in this file.
+
+    Returns
+    -------
+    xarray.Dataset
+        Opened from ``out`` when given. Failed tasks (status ``error``) are
+        listed in its ``failed_tasks`` attribute, and a warning names them.
+
+    Raises
+    ------
+    ResumeError
+        When ``out``'s parts folder is from another spec, or exists without
+        ``resume``; nothing is computed then.
+    """
+    if not isinstance(spec, Spec):
+        spec = load_spec(spec)
+    if progress is None:
+        progress = sys.stderr.isatty()
+    with _parts_folder(spec, out, resume) as parts:
+        todo = [t for t in spec.tasks() if not parts.finished(t.key)]
+        if todo:
+            with _connected(client, scheduler_file, workers or spec.workers, len(todo)) as dask_client:
+                _warm_up(dask_client, todo)
+                bar = tqdm(total=spec.n_tasks, initial=spec.n_tasks - len(todo), unit="cluster",
+                           desc=spec.name, disable=not progress, file=sys.stderr)
+                with bar:
+                    _compute(dask_client, spec, todo, parts, bar)
+        # Clusters are gathered into flat files beside the parts, then written from there.
+        with tempfile.TemporaryDirectory(prefix=".ragged-", dir=parts.path) as scratch:
+            ds, failed = _assemble(spec, parts, Path(scratch))
+            if out is None:
+                ds = ds.copy(deep=True)
+            else:
+                store.save(ds, out)
+                ds = store.open_sweep(out)
+        if not failed:
+            parts.remove()
+    if failed:
+        warnings.warn(f"{len(failed)} of {spec.n_tasks} tasks failed: "
+                      + "; ".join(f"{k}: {m}" for k, m in failed), RuntimeWarning, stacklevel=2)
+    return ds
+
+
+def sweep_scales(spec: Spec) -> np.ndarray:
+    """Box sides every task measures: up to an extent no cluster can exceed.
+
+    A bounded cluster (and its line seed) fits its box; an unbounded,
+    connected one of n particles spans at most n (+ a seed block). The
+    axis is trimmed to the clusters after the sweep.
+    """
+    return measure.default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
+
+
+def measure_task(task, counts, scales, root_seed) -> dict:
+    """Grow one cluster and measure every count; runs on a worker.
+
+    Never raises: a failure is returned as an ``error`` result with its message.
+    """
+    start = time.perf_counter()
+    try:
+        cluster = grow(counts[-1], np.random.SeedSequence(root_seed, spawn_key=task.spawn_key),
+                       checkpoints=counts, **task.params)
+        elapsed = time.perf_counter() - start
+        points = cluster.points
+        reached = np.asarray(counts) <= len(points)
+        prefix = np.minimum(counts, len(points))
+        lattice = cluster.params["model"] == "lattice"
+        box = np.stack([measure.box_counts(points[:m], lattice=lattice, scales=scales)[1]
+                        for m in prefix])
+        return {
+            "box_count": box,
+            "n_grown": prefix.astype(np.int64),
+            "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
+            "radius_gyration": measure.radius_of_gyration(points)[prefix - 1],
+            "max_radius": measure.max_radius(points)[prefix - 1],
+            "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
+            "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
+            "points": points,
+            "diffusion_time": np.asarray(cluster.steps, np.int64),
+            "error": np.array(""),
+        }
+    except Exception as err:
+        return error_result(len(counts), len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
+
+
+def error_result(n_counts, n_scales, dim, message) -> dict:
+    """The result recorded for a task that raised (or whose worker kept dying)."""
+    nan = np.full(n_counts, np.nan)
+    return {
+        "box_count": np.zeros((n_counts, n_scales), np.int64),
+        "n_grown": np.zeros(n_counts, np.int64),
+        "status": np.full(n_counts, STATUSES.index("error"), np.int8),
+        "radius_gyration": nan, "max_radius": nan, "wall_time": nan,
+        "walk_steps": np.zeros(n_counts, np.int64),
+        "points": np.zeros((0, dim)),
+        "diffusion_time": np.zeros(0, np.int64),
+        "error": np.array(" ".join(message.split())),
+    }
+
+
+class Parts:
+    """The folder of finished task results of one sweep.
+
+    ``<key>.npz`` holds a finished task, ``<key>.error.npz`` one that failed
+    (computed again on resume), so that checking what is done reads nothing.
+    """
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def _file(self, key, error=False) -> Path:
+        return self.path / (f"{key}.error.npz" if error else f"{key}.npz")
+
+    def write(self, key, result):
+        error = str(result["error"]) != ""
+        tmp = self.path / f".{key}.{os.getpid()}.tmp"
+        with open(tmp, "wb") as f:
+            np.savez(f, **result)
+        os.replace(tmp, self._file(key, error))
+        if not error:
+            self._file(key, error=True).unlink(missing_ok=True)
+
+    def finished(self, key) -> bool:
+        return self._file(key).exists()
+
+    def read(self, key) -> dict:
+        path = self._file(key) if self.finished(key) else self._file(key, error=True)
+        try:
+            with np.load(path) as z:
+                return {name: z[name] for name in z.files}
+        except Exception as err:  # only a crash of the machine itself can leave one damaged
+            raise OSError(f"{path}: unreadable ({err}); delete it and run again with --resume") from None
+
+    def remove(self):
+        shutil.rmtree(self.path, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _parts_folder(spec, out, resume):
+    identity = {"digest": spec.digest(), "identity": spec.identity()}
+    if out is None:
+        with tempfile.TemporaryDirectory(prefix="dlasweep-") as tmp:
+            yield Parts(Path(tmp))
+        return
+    path = Path(f"{out}.parts")
+    manifest = path / MANIFEST
+    if path.exists():
+        if not resume:
+            raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
+        try:
+            old = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh") from None
+        if old.get("digest") != identity["digest"]:
+            changes = differences(old.get("identity", {}), identity["identity"])
+            raise ResumeError(f"cannot resume: the spec differs from the one in {path} ("
+                              + "; ".join(changes) + ")")
+    else:
+        path.mkdir()
+        tmp = path / f".{MANIFEST}.tmp"
+        tmp.write_text(json.dumps(identity, indent=1))
+        os.replace(tmp, manifest)
+    yield Parts(path)
+
+
+@contextlib.contextmanager
+def _connected(client, scheduler_file, workers, n_tasks):
+    """A client: the one given, one for an address or scheduler file, or an embedded cluster."""
+    if isinstance(client, Client):
+        yield client
+        return
+    if client is not None or scheduler_file is not None:
+        kwargs = {"scheduler_file": str(scheduler_file)} if scheduler_file else {"address": client}
+        with Client(**kwargs) as connected:
+            yield connected
+        return
+    n_workers = min(workers or _usable_cores(), n_tasks)
+    # Workers log heartbeat errors while the cluster shuts down; task failures are reported anyway.
+    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                      dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
+        with Client(cluster) as embedded:
+            yield embedded
+
+
+def _usable_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+def _warm_up(client, tasks):
+    """Compile (or load from numba's cache) each kernel once per worker, before timing starts."""
+    examples = {}
+    for task in tasks:
+        examples.setdefault((task.params["model"], task.params["dim"]), task.params)
+    client.run(_grow_examples, list(examples.values()))
+
+
+def _grow_examples(examples):
+    for params in examples:
+        # A failing example fails its real tasks too, which record the error.
+        with contextlib.suppress(Exception):
+            grow(2, 0, **params)
+
+
+def _compute(client, spec, todo, parts, bar):
+    """Submit tasks in a bounded window and save each result as it arrives."""
+    counts = np.asarray(spec.counts, np.int64)
+    scales = sweep_scales(spec)
+    window = max(100, 4 * sum(client.nthreads().values()))
+    pending = iter(todo)
+    # Unique per run: a key shared with an earlier run's lingering future would return its result.
+    tag = uuid.uuid4().hex[:12]
+    task_of = {}
+
+    def submit(task):
+        future = client.submit(measure_task, task, counts, scales, spec.root_seed,
+                               key=f"{task.key}-{tag}", pure=False)
+        task_of[future.key] = task
+        return future
+
+    running = as_completed([submit(t) for t in itertools.islice(pending, window)],
+                           with_results=True, raise_errors=False)
+    for future, result in running:
+        task = task_of.pop(future.key)
+        if future.status != "finished":
+            # Dask gave up on it (its workers kept dying: KilledWorker) or it was cancelled.
+            error = result[1] if future.status == "error" else None
+            message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
+            result = error_result(len(counts), len(scales), task.params["dim"], message)
+        parts.write(task.key, result)
+        future.release()
+        bar.update()
+        for task in itertools.islice(pending, 1):
+            running.add(submit(task))
+
+
+def _assemble(spec, parts, scratch: Path):
+    """The dataset from every part, in one pass; clusters go through flat files in ``scratch``."""
+    scales = sweep_scales(spec)
+    tasks = list(spec.tasks())
+    grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
+    science = {
+        "box_count": np.zeros((*grid, len(scales)), np.int64),
+        "n_grown": np.zeros(grid, np.int64),
+        "status": np.zeros(grid, np.int8),
+        "walk_steps": np.zeros(grid, np.int64),
+        **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "wall_time")},
+    }
+    lattice = all(t.params["model"] == "lattice" for t in tasks)
+    columns = {a: store.ragged_dtype(lattice) for a in store.AXES[: max(t.params["dim"] for t in tasks)]}
+    columns["diffusion_time"] = np.int64
+    sizes, failed = [], []
+    with contextlib.ExitStack() as files:
+        sinks = {name: files.enter_context(open(scratch / name, "wb")) for name in columns}
+        for task in tasks:
+            result = parts.read(task.key)
+            where = (*task.index[:-1], slice(None), task.index[-1])
+            for name in science:
+                science[name][where] = result[name]
+            points = result["points"]
+            for k, axis in enumerate(store.AXES[: len(columns) - 1]):
+                # With dim swept, 2D clusters get z = 0.
+                column = points[:, k] if k < points.shape[1] else np.zeros(len(points))
+                sinks[axis].write(column.astype(columns[axis]).tobytes())
+            sinks["diffusion_time"].write(result["diffusion_time"].astype(np.int64).tobytes())
+            sizes.append(len(points))
+            if str(result["error"]):
+                failed.append((task.key, str(result["error"])))
+    total = sum(sizes)
+    ragged = {name: np.memmap(scratch / name, dtype, mode="r", shape=(total,)) if total else np.zeros(0, dtype)
+              for name, dtype in columns.items()}
+
+    # Keep scales up to the first at which every cluster fits in one box.
+    fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)
+    top = int(np.argmax(fits)) if fits.any() else len(scales) - 1
+    science["box_count"] = science["box_count"][..., : top + 1]
+    return store.to_dataset(spec, scales[: top + 1], science, sizes, ragged, failed), failed

@@ -1,0 +1,131 @@
+"""The report writes its table, plots and write-up from a sweep dataset."""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import dlasweep as dla
+from dlasweep.measure import box_counts, default_scales, max_radius, radius_of_gyration
+from dlasweep.report import report
+
+STATUSES = "ok boundary step_limit exhausted error".split()
+
+
+def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
+    """A dataset with the DESIGN.md layout, grown and measured here, not by run_sweep."""
+    scales = default_scales(counts[-1])
+    shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
+    science = {
+        "box_count": np.zeros((*shape, len(scales)), np.int64),
+        "n_grown": np.zeros(shape, np.int64),
+        "status": np.zeros(shape, np.int8),
+        "radius_gyration": np.zeros(shape),
+        "max_radius": np.zeros(shape),
+        "wall_time": np.zeros(shape),
+        "walk_steps": np.zeros(shape, np.int64),
+    }
+    ragged, cluster = {a: [] for a in ("x", "y", "diffusion_time")}, {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
+    particles = []
+    for where in itertools.product(*(range(len(v)) for v in axes.values()), range(len(sizes)), range(seeds)):
+        params = {name: values[i] for (name, values), i in zip(axes.items(), where)}
+        size, seed = sizes[where[-2]], where[-1]
+        start = time.perf_counter()
+        c = dla.grow(counts[-1], seed=seed, size=size, **params)
+        elapsed = time.perf_counter() - start
+        rg, rmax = radius_of_gyration(c.points), max_radius(c.points)
+        for k, n in enumerate(counts):
+            m = min(n, len(c.points))
+            index = (*where[:-1], k, seed)
+            science["box_count"][index] = box_counts(c.points[:m], scales=scales)[1]
+            science["n_grown"][index] = m
+            science["status"][index] = 0 if m == n else STATUSES.index(c.status)
+            science["radius_gyration"][index], science["max_radius"][index] = rg[m - 1], rmax[m - 1]
+            science["wall_time"][index] = elapsed * m / len(c.points)
+            science["walk_steps"][index] = c.steps[:m].sum()
+        ragged["x"].append(c.points[:, 0])
+        ragged["y"].append(c.points[:, 1])
+        ragged["diffusion_time"].append(c.steps)
+        particles.append(len(c.points))
+        for name, value in (*params.items(), ("size", size), ("seed", seed)):
+            cluster[f"cluster_{name}"].append(value)
+    dims = (*axes, "size", "n_particles", "seed")
+    ds = xr.Dataset(
+        {
+            **{name: ((*dims, "scale") if name == "box_count" else dims, values) for name, values in science.items()},
+            "cluster_particles": ("cluster", np.array(particles), {"sample_dimension": "particle"}),
+            **{name: ("particle", np.concatenate(values)) for name, values in ragged.items()},
+        },
+        coords={
+            **{name: (name, list(values)) for name, values in axes.items()},
+            "size": ("size", list(sizes)),
+            "n_particles": ("n_particles", list(counts)),
+            "seed": ("seed", list(range(seeds))),
+            "scale": ("scale", scales),
+            **{name: ("cluster", values) for name, values in cluster.items()},
+            "model": "lattice",
+            "dim": 2,
+        },
+        attrs={"title": "synthetic sweep", "spec": 'name = "synthetic"', "root_seed": 1, "source": "dlasweep test"},
+    )
+    ds["status"].attrs.update(flag_values=np.arange(5, dtype=np.int8), flag_meanings=" ".join(STATUSES))
+    return ds
+
+
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png",
+          "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
+
+
+def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
+    ds = synthetic_sweep({"stickiness": [1.0, 0.5]})
+    written = report(ds, tmp_path / "out")
+    names = {p.name for p in written}
+    # stickiness is a failure axis; no method axis is swept, so no speed-accuracy chart.
+    assert names == ALWAYS | {"failure.png"}
+    assert {p.name for p in (tmp_path / "out").iterdir()} == names
+    for path in written:
+        assert path.stat().st_size > 0
+    rows = list(csv.DictReader(open(tmp_path / "out" / "summary.csv")))
+    assert len(rows) == 2 * 3  # configurations x counts
+    assert {r["stickiness"] for r in rows} == {"1.0", "0.5"}
+    assert all(r["seeds"] == "3" and r["status"] == "ok:3" for r in rows)
+    big = [r for r in rows if r["n_particles"] == "800"]
+    assert all(1.3 < float(r["D_mr_mean"]) < 2.1 for r in big)
+    text = (tmp_path / "out" / "report.md").read_text()
+    for name in names - {"report.md", "summary.csv", "summary.md"}:
+        assert f"({name})" in text
+    assert "speed_accuracy" not in text and "reads low" in text and "1.7100(3)" in text
+
+
+def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
+    ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, sizes=(0, 40), counts=(200, 600), seeds=2)
+    names = {p.name for p in report(ds, tmp_path)}
+    assert names == ALWAYS | {"speed_accuracy.png", "failure.png"}
+    rows = list(csv.DictReader(open(tmp_path / "summary.csv")))
+    # A box of 40 cannot hold 600 particles: growth stops at the boundary, and the table says so.
+    bounded = [r for r in rows if r["size"] == "40" and r["n_particles"] == "600"]
+    assert bounded and all(r["flagged"] == "True" and "boundary" in r["status"] for r in bounded)
+    assert "⚠" in (tmp_path / "summary.md").read_text()
+
+
+def test_report_of_a_64_cluster_sweep_takes_under_30_seconds(tmp_path):
+    ds = synthetic_sweep({"stickiness": [1.0, 0.7, 0.5, 0.3]}, counts=(300, 1000, 3000), seeds=16)
+    assert ds.sizes["cluster"] == 64
+    start = time.perf_counter()
+    report(ds, tmp_path)
+    assert time.perf_counter() - start < 30
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_draw_cluster_writes_a_picture(tmp_path, suffix):
+    from dlasweep.report import draw_cluster
+
+    c = dla.grow(300, seed=1)
+    path = draw_cluster(c.points, c.params, tmp_path / f"cluster{suffix}")
+    head = path.read_bytes()[:200]
+    assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head

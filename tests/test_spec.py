@@ -1,0 +1,110 @@
+"""Sweep specs: parsing, the task grid, and one clear error per bad key."""
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, TINY_SPEC
+from dlasweep.spec import SpecError, differences, load_spec, parse_spec
+
+
+def test_tiny_spec_grid():
+    spec = parse_spec(TINY_SPEC)
+    assert spec.name == "tiny"
+    assert spec.axes == {"stickiness": (1.0, 0.5)}
+    assert spec.fixed == {"model": "lattice", "dim": 2}
+    assert (spec.sizes, spec.counts, spec.seeds) == ((0, 24), (20, 60, 150), (0, 1, 2))
+    assert spec.shape == (2, 2, 3) and spec.n_tasks == 12
+    tasks = list(spec.tasks())
+    assert [t.index for t in tasks] == [tuple(i) for i in np.ndindex(2, 2, 3)]
+    assert len({t.key for t in tasks}) == 12
+    assert tasks[7].params["stickiness"] == 0.5 and tasks[7].params["size"] == 0
+    assert tasks[7].params["neighbours"] == 4  # resolved, every parameter present
+    assert spec.root_seed == 12345 and spec.text == TINY_SPEC
+
+
+def test_counts_sorted_and_scalars_accepted():
+    spec = parse_spec("[grid]\nn_particles = [300, 100]\nsize = 0\nseeds = [4, 9]\n")
+    assert spec.counts == (100, 300) and spec.sizes == (0,) and spec.seeds == (4, 9)
+    assert spec.axes == {} and spec.root_seed == 0
+    # A listed seed names its own stream: replicate 4 here is replicate 4 of `seeds = 10`.
+    assert [t.spawn_key for t in spec.tasks()] == [(0, 4), (0, 9)]
+
+
+def test_quick_workflow_matches_the_issue():
+    spec = load_spec(ROOT / "workflows" / "quick.toml")
+    assert spec.fixed["model"] == "lattice" and spec.fixed["dim"] == 2
+    assert max(spec.counts) >= 10_000 and len(spec.seeds) == 8 and spec.axes
+
+
+def test_every_workflow_spec_is_valid():
+    for path in (ROOT / "workflows").glob("*.toml"):
+        load_spec(path)
+
+
+@pytest.mark.parametrize("change, key", [
+    (("stickiness = [1.0, 0.5]", "stickiness = 0"), "model.stickiness"),
+    (("stickiness = [1.0, 0.5]", "stickiness = [1.0, 1.5]"), "model.stickiness"),
+    (("stickiness = [1.0, 0.5]", "stickiness = [1.0, 1.0]"), "model.stickiness"),
+    (("stickiness = [1.0, 0.5]", "stickiness = []"), "model.stickiness"),
+    (("stickiness = [1.0, 0.5]", "stickyness = 0.5"), "model.stickyness"),
+    (("stickiness = [1.0, 0.5]", 'stickiness = "high"'), "model.stickiness"),
+    (('model = "lattice"', 'model = "square"'), "model.model"),
+    (("dim = 2", "dim = 4"), "model.dim"),
+    (("dim = 2", "dim = 2.0"), "model.dim"),
+    (("dim = 2", 'dim = 2\nlaunch = "box"'), "model.launch"),
+    (("dim = 2", "dim = 2\nsize = 10"), "model.size"),
+    (("dim = 2", "dim = 2\njumps = 1"), "model.jumps"),
+    (("size = [0, 24]", "size = [0, 4]"), "grid.size"),
+    (("size = [0, 24]", "size = [-1]"), "grid.size"),
+    (("size = [0, 24]", "size = []"), "grid.size"),
+    (("n_particles = [20, 60, 150]", "n_particles = [1e3]"), "grid.n_particles"),
+    (("n_particles = [20, 60, 150]", "n_particles = [0, 10]"), "grid.n_particles"),
+    (("n_particles = [20, 60, 150]", "n_particles = [10000000000]"), "grid.n_particles"),
+    (("n_particles = [20, 60, 150]", ""), "grid.n_particles"),
+    (("seeds = 3", "seeds = 0"), "grid.seeds"),
+    (("seeds = 3", "seeds = [1, -2]"), "grid.seeds"),
+    (("seeds = 3", "seeds = true"), "grid.seeds"),
+    (("seeds = 3", "seeds = 3\nreplicas = 2"), "grid.replicas"),
+    (("root_seed = 12345", "root_seed = -5"), "run.root_seed"),
+    (("root_seed = 12345", 'root_seed = "x"'), "run.root_seed"),
+    (("root_seed = 12345", "root_seed = 1\nworkers = 0"), "run.workers"),
+    (("root_seed = 12345", "root_seed = 1\nthreads = 2"), "run.threads"),
+    (("[run]", "[runs]"), "runs"),
+    (('name = "tiny"', "name = 3"), "name"),
+    (("seeds = 3", "seeds = "), "TOML"),
+])
+def test_bad_values_name_their_key(change, key):
+    text = TINY_SPEC.replace(*change)
+    assert text != TINY_SPEC
+    with pytest.raises(SpecError) as caught:
+        parse_spec(text)
+    message = str(caught.value)
+    assert message.startswith(key + ":") or (key == "TOML" and "TOML" in message), message
+    assert "\n" not in message
+
+
+def test_sections_must_be_tables():
+    with pytest.raises(SpecError, match=r"^grid: expected a \[grid\] table"):
+        parse_spec("grid = 3")
+
+
+def test_combination_errors_say_where():
+    with pytest.raises(SpecError, match=r"model.launch: .* \(at .*size=0\)"):
+        parse_spec(TINY_SPEC.replace("dim = 2", 'dim = 2\nlaunch = "box"'))
+
+
+def test_missing_or_unreadable_file(tmp_path):
+    with pytest.raises(SpecError, match="cannot read"):
+        load_spec(tmp_path / "absent.toml")
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    with pytest.raises(SpecError):
+        load_spec(binary)
+
+
+def test_digest_follows_the_science_not_the_comments():
+    spec = parse_spec(TINY_SPEC)
+    assert parse_spec("# a comment\n" + TINY_SPEC).digest() == spec.digest()
+    changed = parse_spec(TINY_SPEC.replace("seeds = 3", "seeds = 4"))
+    assert changed.digest() != spec.digest()
+    assert differences(spec.identity(), changed.identity()) == ["grid.seeds: [0, 1, 2] -> [0, 1, 2, 3]"]

@@ -1,0 +1,163 @@
+"""The netCDF layer: one round trip of the DESIGN.md layout, atomic writes, bad files."""
+
+import shutil
+import subprocess
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+
+from dlasweep import store
+from dlasweep.grow import Cluster
+from dlasweep.params import resolve
+from dlasweep.spec import parse_spec
+
+SPEC = """\
+name = "layout"
+[grid]
+size = [0, 16]
+n_particles = [5, 9]
+seeds = [3, 7]
+[model]
+model = ["lattice", "offlattice"]
+jumps = [true, false]
+[run]
+root_seed = 99
+"""
+
+
+def synthetic_dataset(spec_text=SPEC, failed=()):
+    """Random results in the sweep's layout, without growing anything."""
+    rng = np.random.default_rng(0)
+    spec = parse_spec(spec_text)
+    scales = 2.0 ** np.arange(4)
+    grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
+    science = {
+        "box_count": rng.integers(1, 9, (*grid, len(scales))),
+        "n_grown": rng.integers(1, 9, grid),
+        "status": rng.integers(0, 5, grid).astype(np.int8),
+        "walk_steps": rng.integers(0, 1000, grid),
+        **{k: rng.random(grid) for k in ("radius_gyration", "max_radius", "wall_time")},
+    }
+    sizes = rng.integers(0, 9, spec.n_tasks)
+    total = int(sizes.sum())
+    ragged = {"x": rng.normal(size=total), "y": rng.normal(size=total),
+              "diffusion_time": rng.integers(0, 50, total)}
+    return store.to_dataset(spec, scales, science, sizes, ragged, failed)
+
+
+@pytest.fixture
+def saved(tmp_path):
+    ds = synthetic_dataset(failed=[("task-0-0-0-1", "RuntimeError: boom")])
+    path = tmp_path / "layout.nc"
+    store.save(ds, path)
+    return ds, path
+
+
+def test_round_trip(saved):
+    ds, path = saved
+    back = store.open_sweep(path)
+    xr.testing.assert_identical(back.drop_attrs(deep=False), ds.drop_attrs(deep=False))
+    assert back.attrs == ds.attrs
+    # Strings and booleans come back as such, and select.
+    assert back["model"].dtype.kind in "OU" and back["jumps"].dtype == bool
+    assert back["cluster_jumps"].dtype == bool
+    assert back.sel(model="offlattice", jumps=False)["box_count"].dims == (
+        "size", "n_particles", "seed", "scale")
+    back.close()
+
+
+def test_layout_follows_design(saved):
+    ds, _ = saved
+    assert ds["box_count"].dims == ("model", "jumps", "size", "n_particles", "seed", "scale")
+    for name in ("n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps"):
+        assert ds[name].dims == ("model", "jumps", "size", "n_particles", "seed")
+    for name in ("x", "y", "diffusion_time"):
+        assert ds[name].dims == ("particle",)
+    assert ds["cluster_particles"].dims == ("cluster",)
+    assert int(ds["cluster_particles"].sum()) == ds.sizes["particle"]
+    for name in ("cluster_model", "cluster_jumps", "cluster_size", "cluster_seed"):
+        assert ds[name].dims == ("cluster",) and name in ds.coords
+    assert list(ds["cluster_seed"].values[:4]) == [3, 7, 3, 7]
+    assert ds["status"].attrs["flag_meanings"] == "ok boundary step_limit exhausted error"
+    assert {"Conventions", "title", "source", "history", "spec", "root_seed"} <= set(ds.attrs)
+    assert ds.attrs["root_seed"] == 99 and ds.attrs["spec"] == SPEC
+    assert "task-0-0-0-1: RuntimeError: boom" in ds.attrs["failed_tasks"]
+
+
+def test_readable_without_xarray(saved):
+    _, path = saved
+    with netCDF4.Dataset(path) as nc:
+        assert nc.Conventions == "CF-1.8" and nc.source.startswith("dlasweep ")
+        assert nc["cluster_particles"].sample_dimension == "particle"
+        assert nc["x"].filters()["zlib"]
+        for name, var in nc.variables.items():
+            assert var.units and var.long_name, name
+        assert list(nc["model"][:]) == ["lattice", "offlattice"]
+        assert list(nc["jumps"][:]) == [1, 0]
+
+
+@pytest.mark.skipif(shutil.which("ncdump") is None, reason="ncdump (netcdf-bin) not installed")
+def test_ncdump_reads_the_header(saved):
+    _, path = saved
+    header = subprocess.run(["ncdump", "-h", str(path)], capture_output=True, text=True, check=True).stdout
+    assert 'cluster_particles:sample_dimension = "particle"' in header
+
+
+def test_save_is_atomic(tmp_path, monkeypatch):
+    path = tmp_path / "out.nc"
+
+    def crash(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", crash)
+    with pytest.raises(OSError):
+        store.save(synthetic_dataset(), path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cluster_points(tmp_path):
+    ds = synthetic_dataset()
+    counts = ds["cluster_particles"].values
+    k = int(np.flatnonzero(counts)[2])
+    start = counts[:k].sum()
+    expected = np.stack([ds["x"].values, ds["y"].values], axis=1)[start:start + counts[k]]
+    np.testing.assert_array_equal(store.cluster_points(ds, k), expected)
+    where = {name.removeprefix("cluster_"): ds[name].values[k]
+             for name in ds.coords if name.startswith("cluster_")}
+    np.testing.assert_array_equal(store.cluster_points(ds, **where), expected)
+    with pytest.raises(ValueError, match="matches 8 clusters"):
+        store.cluster_points(ds, model="lattice")
+    with pytest.raises(ValueError, match="colour: not a cluster parameter"):
+        store.cluster_points(ds, colour="red")
+    with pytest.raises(IndexError):
+        store.cluster_points(ds, 99)
+
+
+def test_one_cluster_file(tmp_path):
+    points = np.array([[0, 0], [1, 0], [1, 1]])
+    cluster = Cluster(points, np.array([0, 5, 7]), "boundary", resolve(size=16))
+    path = tmp_path / "one.nc"
+    store.save(store.cluster_dataset(cluster, seed=4), path)
+    ds = store.open_sweep(path)
+    np.testing.assert_array_equal(store.cluster_points(ds, 0), points)
+    assert ds["x"].dtype == np.int32 and int(ds["size"]) == 16 and bool(ds["jumps"])
+    assert store.STATUS_FLAGS[int(ds["status"][0])] == "boundary"
+    ds.close()
+
+
+def test_bad_files_are_refused_clearly(tmp_path, saved):
+    _, good = saved
+    text = tmp_path / "notes.nc"
+    text.write_text("not netCDF")
+    truncated = tmp_path / "truncated.nc"
+    truncated.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    foreign = tmp_path / "foreign.nc"
+    xr.Dataset({"t": ("time", [1.0, 2.0])}).to_netcdf(foreign)
+    cases = {tmp_path / "absent.nc": "no such file", text: "not a readable netCDF file",
+             truncated: "not a readable netCDF file|truncated", foreign: "not a dlasweep dataset"}
+    for path, reason in cases.items():
+        with pytest.raises(store.StoreError, match=reason) as caught:
+            store.open_sweep(path)
+        assert "\n" not in str(caught.value)

@@ -1,0 +1,290 @@
+"""Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from distributed import Client, LocalCluster
+
+import dlasweep as dla
+from conftest import TINY_SPEC
+from dlasweep import measure, store, sweep
+from dlasweep.spec import parse_spec
+
+
+def science(ds):
+    """The variables that must be bit-identical between runs, clusters included."""
+    return ds[[*store.SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]].drop_attrs(deep=False).load()
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory, dask_client):
+    """The tiny sweep, run once on two in-process workers."""
+    out = tmp_path_factory.mktemp("reference") / "tiny.nc"
+    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    yield ds
+    ds.close()
+
+
+def test_clusters_and_measures_equal_direct_growth(reference):
+    spec = parse_spec(TINY_SPEC)
+    for k, task in enumerate(spec.tasks()):
+        seed = np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key)
+        cluster = dla.grow(max(spec.counts), seed, **task.params)
+        np.testing.assert_array_equal(store.cluster_points(reference, k), cluster.points)
+        cell = reference.isel(dict(zip(["stickiness", "size", "seed"], task.index)))
+        for j, n in enumerate(spec.counts):
+            m = min(n, cluster.n)
+            at = cell.isel(n_particles=j)
+            assert int(at["n_grown"]) == m
+            assert int(at["walk_steps"]) == cluster.steps[:m].sum()
+            assert float(at["radius_gyration"]) == measure.radius_of_gyration(cluster.points)[m - 1]
+            _, counts = measure.box_counts(cluster.points[:m], scales=reference["scale"].values)
+            np.testing.assert_array_equal(at["box_count"].values, counts)
+            ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
+            assert ok == (m == n) and (ok or cluster.status != "ok")
+
+
+def test_scale_axis_is_trimmed_to_the_clusters(reference):
+    scales = reference["scale"].values
+    assert scales[0] == 1.0 and np.all(np.diff(scales) > 0)
+    top = reference["box_count"].isel(scale=-1)
+    assert (top == 1).all() and not (reference["box_count"].isel(scale=-2) == 1).all()
+
+
+def test_one_worker_gives_the_same_results(reference):
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as lc:
+        with Client(lc) as client:
+            alone = dla.run_sweep(parse_spec(TINY_SPEC), client=client)
+    xr.testing.assert_identical(science(alone), science(reference))
+
+
+class Interrupt(BaseException):
+    """Stands for a kill: nothing in the sweep may catch it."""
+
+
+def interrupt_after(monkeypatch, n_parts):
+    """Make the n-th saved part the last one, as if the process died there."""
+    written = []
+    real_write = sweep.Parts.write
+
+    def write(self, key, result):
+        if len(written) == n_parts:
+            raise Interrupt
+        real_write(self, key, result)
+        written.append(key)
+
+    monkeypatch.setattr(sweep.Parts, "write", write)
+    return written
+
+
+def record_writes(monkeypatch):
+    written = []
+    real_write = sweep.Parts.write
+    monkeypatch.setattr(sweep.Parts, "write",
+                        lambda self, key, result: (written.append(key), real_write(self, key, result)))
+    return written
+
+
+def test_resume_computes_only_what_is_missing(tmp_path, dask_client, reference, monkeypatch):
+    out = tmp_path / "tiny.nc"
+    spec = parse_spec(TINY_SPEC)
+    first = interrupt_after(monkeypatch, 5)
+    with pytest.raises(Interrupt):
+        dla.run_sweep(spec, client=dask_client, out=out)
+    assert not out.exists() and len(list(out.with_name("tiny.nc.parts").glob("*.npz"))) == 5
+    monkeypatch.undo()
+    with pytest.raises(sweep.ResumeError, match="--resume"):
+        dla.run_sweep(spec, client=dask_client, out=out)
+    second = record_writes(monkeypatch)
+    resumed = dla.run_sweep(spec, client=dask_client, out=out, resume=True)
+    assert sorted(first + second) == sorted(t.key for t in spec.tasks())
+    xr.testing.assert_identical(science(resumed), science(reference))
+    assert not out.with_name("tiny.nc.parts").exists()
+    resumed.close()
+
+
+def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
+    out = tmp_path / "tiny.nc"
+    interrupt_after(monkeypatch, 2)
+    with pytest.raises(Interrupt):
+        dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    monkeypatch.undo()
+    changed = parse_spec(TINY_SPEC.replace("[20, 60, 150]", "[20, 60, 100]"))
+    with pytest.raises(sweep.ResumeError, match=r"grid.n_particles: \[20, 60, 150\] -> \[20, 60, 100\]"):
+        dla.run_sweep(changed, client=dask_client, out=out, resume=True)
+    assert len(list(out.with_name("tiny.nc.parts").glob("*.npz"))) == 2
+
+
+def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client, reference, monkeypatch):
+    real_grow = sweep.grow
+
+    def grow_failing_seed_1(n, seed, **kwargs):
+        if seed.spawn_key[-1] == 1:
+            raise RuntimeError("simulated failure")
+        return real_grow(n, seed, **kwargs)
+
+    monkeypatch.setattr(sweep, "grow", grow_failing_seed_1)
+    out = tmp_path / "tiny.nc"
+    with pytest.warns(RuntimeWarning, match="4 of 12 tasks failed"):
+        ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    error = store.STATUS_FLAGS.index("error")
+    assert (ds["status"].sel(seed=1) == error).all() and (ds["status"].sel(seed=[0, 2]) != error).all()
+    assert "task-0-0-1: RuntimeError: simulated failure" in ds.attrs["failed_tasks"]
+    assert ds["cluster_particles"].values.reshape(2, 2, 3)[..., 1].sum() == 0
+    ds.close()
+    monkeypatch.undo()
+    retried = record_writes(monkeypatch)
+    healed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out, resume=True)
+    assert sorted(retried) == ["task-0-0-1", "task-0-1-1", "task-1-0-1", "task-1-1-1"]
+    xr.testing.assert_identical(science(healed), science(reference))
+    healed.close()
+
+
+def test_submission_is_batched(dask_client, monkeypatch):
+    """The client holds a bounded window of tasks, however many the sweep has."""
+    spec = parse_spec("[grid]\nn_particles = [1]\nseeds = 250\n")
+    in_flight, peak = [0], [0]
+    real_submit, real_write = dask_client.submit, sweep.Parts.write
+
+    def submit(*args, **kwargs):
+        in_flight[0] += 1
+        peak[0] = max(peak[0], in_flight[0])
+        return real_submit(*args, **kwargs)
+
+    def write(self, key, result):
+        in_flight[0] -= 1
+        real_write(self, key, result)
+
+    monkeypatch.setattr(dask_client, "submit", submit)
+    monkeypatch.setattr(sweep.Parts, "write", write)
+    ds = dla.run_sweep(spec, client=dask_client)
+    assert peak[0] == 100 and ds.sizes["cluster"] == 250 and (ds["n_grown"] == 1).all()
+
+
+def test_early_stops_keep_their_status(dask_client):
+    spec = parse_spec(TINY_SPEC.replace("dim = 2", "dim = 2\nmax_steps = 300"))
+    ds = dla.run_sweep(spec, client=dask_client)
+    for k, task in enumerate(spec.tasks()):
+        cluster = dla.grow(max(spec.counts), np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key),
+                           **task.params)
+        final = ds.isel({**dict(zip(["stickiness", "size", "seed"], task.index)), "n_particles": -1})
+        assert store.STATUS_FLAGS[int(final["status"])] == cluster.status
+        assert int(final["n_grown"]) == int(ds["cluster_particles"][k]) == cluster.n
+    assert (ds["status"] == store.STATUS_FLAGS.index("step_limit")).any()
+
+
+# Real processes: an external scheduler and workers, kill -9, resume.
+
+BIN = Path(sys.executable).parent
+SLOW_SPEC = """\
+name = "slow"
+[grid]
+n_particles = [1000, 10000]
+seeds = 8
+[run]
+root_seed = 5
+"""
+"""Eight clusters of about half a second each: time to kill something mid-sweep."""
+
+
+def spawn(*argv, log):
+    """Start a command in a session of its own (so that killpg reaches all its processes)."""
+    with open(log, "wb") as output:
+        return subprocess.Popen([str(a) for a in argv], stdout=output, stderr=subprocess.STDOUT,
+                                start_new_session=True, cwd=log.parent)
+
+
+def wait_for(condition, what, timeout=60.0):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"waited {timeout} s for {what}")
+        time.sleep(0.05)
+
+
+def finished_parts(out):
+    return list(Path(f"{out}.parts").glob("task-*.npz"))
+
+
+def start_worker(scheduler_file, log):
+    worker = spawn(BIN / "dask", "worker", "--scheduler-file", scheduler_file, "--nthreads", "1",
+                   "--host", "127.0.0.1", "--no-dashboard", log=log)
+    wait_for(lambda: b"Registered to" in log.read_bytes(), "a worker to register")
+    return worker
+
+
+@pytest.fixture(scope="module")
+def external_scheduler(tmp_path_factory):
+    """A real ``dask scheduler`` and one ``dask worker`` process on 127.0.0.1; yields the scheduler file."""
+    folder = tmp_path_factory.mktemp("external")
+    scheduler_file = folder / "scheduler.json"
+    processes = [spawn(BIN / "dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                       "--scheduler-file", scheduler_file, log=folder / "scheduler.log")]
+    try:
+        wait_for(scheduler_file.exists, "the scheduler file")
+        processes.append(start_worker(scheduler_file, folder / "worker.log"))
+        yield scheduler_file
+    finally:
+        for process in processes:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+@pytest.fixture(scope="module")
+def slow_reference(dask_client):
+    return science(dla.run_sweep(parse_spec(SLOW_SPEC), client=dask_client))
+
+
+@pytest.fixture
+def slow_spec(tmp_path):
+    path = tmp_path / "slow.toml"
+    path.write_text(SLOW_SPEC)
+    return path
+
+
+@pytest.mark.slow
+def test_a_killed_worker_loses_nothing(external_scheduler, slow_spec, slow_reference, tmp_path):
+    extra = start_worker(external_scheduler, tmp_path / "extra-worker.log")
+    out = tmp_path / "slow.nc"
+    run = spawn(BIN / "dlasweep", "sweep", slow_spec, "-o", out, "--scheduler-file", external_scheduler,
+                log=tmp_path / "sweep.log")
+    try:
+        wait_for(lambda: finished_parts(out), "a first finished task")
+        os.killpg(extra.pid, signal.SIGKILL)
+        assert run.wait(timeout=120) == 0, (tmp_path / "sweep.log").read_text()
+    finally:
+        for process in (extra, run):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    with dla.open_sweep(out) as ds:
+        xr.testing.assert_identical(science(ds), slow_reference)
+
+
+@pytest.mark.slow
+def test_resume_after_kill_9(external_scheduler, slow_spec, slow_reference, tmp_path, run_cli):
+    out = tmp_path / "slow.nc"
+    run = spawn(BIN / "dlasweep", "sweep", slow_spec, "-o", out, "--scheduler-file", external_scheduler,
+                log=tmp_path / "sweep.log")
+    try:
+        wait_for(lambda: len(finished_parts(out)) >= 2, "two finished tasks")
+    finally:
+        os.killpg(run.pid, signal.SIGKILL)
+        run.wait()
+    assert 2 <= len(finished_parts(out)) < 8 and not out.exists()
+    address = json.loads(external_scheduler.read_text())["address"]
+    status, _, err = run_cli("sweep", slow_spec, "-o", out, "--resume", "--scheduler", address)
+    assert status == 0, err
+    with dla.open_sweep(out) as ds:
+        xr.testing.assert_identical(science(ds), slow_reference)
+    assert not Path(f"{out}.parts").exists()
