@@ -325,12 +325,15 @@ def _box_counts(sweep, path):
     last = len(sweep.counts) - 1
     shown = sweep.configs[:_MAX_PANELS]
     fig, axes = _figure(len(shown))
+    # Past the largest cluster every count is 1: nothing to see there.
+    visible = scales <= 2 * scales[min(np.argmax(box.max(axis=tuple(range(box.ndim - 1))) <= 1), len(scales) - 1)]
     for ax, config in zip(axes, shown):
         index = (*config, last, 0)
         for seed in range(sweep.ds.sizes["seed"]):
-            ax.loglog(scales, box[(*config, last, seed)], color="0.75", lw=0.7)
+            ax.loglog(scales[visible], box[(*config, last, seed)][visible], color="0.75", lw=0.7)
         fit = sweep.fits.get(index)
-        ax.loglog(scales, box[index], "o", ms=2.5, color="C0", label="seed 0")
+        ax.loglog(scales[visible], box[index][visible], "o", ms=2.5, color="C0", label="seed 0")
+        ax.minorticks_off()
         if fit is not None and np.isfinite(fit.D):
             span = (scales >= fit.lo) & (scales <= fit.hi)
             x = scales[span]

@@ -1,5 +1,7 @@
 """The command line: bad input exits 2 with one line and writes nothing; sweeps end to end."""
 
+import contextlib
+import io
 import shutil
 import subprocess
 
@@ -96,18 +98,46 @@ def check_design(ds, spec_text):
     assert (ds["wall_time"] > 0).all() and (ds["box_count"] >= 1).all()
 
 
-def test_sweep_end_to_end_on_a_running_scheduler(run_cli, write_spec, tmp_path, dask_cluster):
-    out = tmp_path / "tiny.nc"
-    status, stdout, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", dask_cluster.scheduler_address)
+@pytest.fixture(scope="module")
+def tiny_sweep(tmp_path_factory, dask_cluster):
+    """The tiny spec swept through the command line; (status, stdout, stderr, folder)."""
+    from dlasweep.cli import main
+
+    folder = tmp_path_factory.mktemp("cli")
+    (folder / "spec.toml").write_text(TINY_SPEC)
+    with contextlib.redirect_stdout(io.StringIO()) as out, contextlib.redirect_stderr(io.StringIO()) as err:
+        status = main(["sweep", str(folder / "spec.toml"), "-o", str(folder / "tiny.nc"),
+                       "--scheduler", dask_cluster.scheduler_address])
+    return status, out.getvalue(), err.getvalue(), folder
+
+
+def test_sweep_end_to_end_on_a_running_scheduler(tiny_sweep):
+    status, stdout, err, folder = tiny_sweep
     assert status == 0, err
     assert "12 clusters" in stdout
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml", "tiny.nc"]
+    assert sorted(p.name for p in folder.iterdir()) == ["spec.toml", "tiny.nc"]
+    out = folder / "tiny.nc"
     with store.open_sweep(out) as ds:
         check_design(ds, TINY_SPEC)
     with netCDF4.Dataset(out) as nc:
         assert nc["cluster_particles"].sample_dimension == "particle"
     if shutil.which("ncdump"):
         subprocess.run(["ncdump", "-h", str(out)], check=True, capture_output=True)
+
+
+def test_report_of_the_sweep(tiny_sweep, run_cli):
+    folder = tiny_sweep[3]
+    status, _, err = run_cli("report", folder / "tiny.nc", "-o", folder / "report")
+    assert status == 0, err
+    assert any((folder / "report").glob("*.png"))
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_grow_draws_the_cluster(suffix, run_cli, tmp_path):
+    out = tmp_path / f"cluster{suffix}"
+    status, _, err = run_cli("grow", "-n", "50", "-o", out)
+    assert status == 0, err
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" if suffix == ".png" else b"<svg" in out.read_bytes()
 
 
 @pytest.mark.slow

@@ -22,12 +22,12 @@ def slow_box_count(points, scale, lattice, offsets=4):
             if lattice:
                 boxes.add(tuple(np.floor((p - origin) / scale).astype(int)))
                 continue
-            home = np.floor((p - origin) / scale).astype(int)
+            u = p - origin  # in the grid's frame, box b spans [b * scale, (b + 1) * scale)
+            home = np.floor(u / scale).astype(int)
             for step in itertools.product((-1, 0, 1), repeat=len(p)):
                 box = home + np.array(step)
-                low = origin + box * scale
-                nearest = np.clip(p, low, low + scale)
-                if ((p - nearest) ** 2).sum() < 0.25:
+                nearest = np.clip(u, box * scale, (box + 1) * scale)
+                if ((u - nearest) ** 2).sum() < 0.25:
                     boxes.add(tuple(box))
         best = len(boxes) if best is None else min(best, len(boxes))
     return best

@@ -113,6 +113,7 @@ def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
     assert "⚠" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow
 def test_report_of_a_64_cluster_sweep_takes_under_30_seconds(tmp_path):
     ds = synthetic_sweep({"stickiness": [1.0, 0.7, 0.5, 0.3]}, counts=(300, 1000, 3000), seeds=16)
     assert ds.sizes["cluster"] == 64
