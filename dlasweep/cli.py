@@ -19,8 +19,8 @@ from pathlib import Path
 from . import __version__, store
 from . import params as _params
 from .grow import grow
-from .report import report
-from .spec import SpecError, load_spec
+from .report import draw_cluster, report
+from .spec import MAX_PARTICLES, SpecError, load_spec
 from .sweep import ResumeError, run_sweep
 
 GROW_SUFFIXES = (".nc", ".png", ".svg")
@@ -69,36 +69,39 @@ def main(argv=None) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="dlasweep", description="Parameter sweeps of diffusion-limited aggregation.",
-                     allow_abbrev=False)
+    parser = _Parser(prog="dlasweep", allow_abbrev=False,
+                     description="Parameter sweeps of diffusion-limited aggregation.")
     parser.add_argument("--version", action="version", version=f"dlasweep {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
 
-    grow = commands.add_parser("grow", allow_abbrev=False, help="grow one cluster and save it (.nc) or draw it (.png, .svg)")
-    grow.add_argument("-n", type=int, required=True, help="number of particles")
-    grow.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    one = commands.add_parser("grow", allow_abbrev=False,
+                              help="grow one cluster and save it (.nc) or draw it (.png, .svg)")
+    one.add_argument("-n", type=int, required=True, help="number of particles")
+    one.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     for name, default in _params.DEFAULTS.items():
         flags = dict.fromkeys([f"--{name}", f"--{name.replace('_', '-')}"])
-        grow.add_argument(*flags, dest=name, metavar="V", help=f"model parameter (default {default!r})")
-    grow.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
-    grow.set_defaults(handler=_grow)
+        one.add_argument(*flags, dest=name, metavar="V", help=f"model parameter (default {default!r})")
+    one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
+    one.set_defaults(handler=_grow)
 
-    sweep = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
-    sweep.add_argument("spec", type=Path, help="sweep spec, e.g. workflows/quick.toml")
-    sweep.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
-    where = sweep.add_mutually_exclusive_group()
+    many = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
+    many.add_argument("spec", type=Path, help="sweep spec, e.g. workflows/quick.toml")
+    many.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
+    where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
-    sweep.add_argument("--workers", type=int, metavar="K", help="processes of the embedded dask cluster")
-    sweep.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
-    sweep.set_defaults(handler=_sweep)
+    many.add_argument("--workers", type=int, metavar="K", help="processes of the embedded dask cluster")
+    many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
+    many.set_defaults(handler=_sweep)
 
-    report = commands.add_parser("report", allow_abbrev=False, help="tables and plots from a sweep's netCDF file")
-    report.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
-    report.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
-    report.set_defaults(handler=_report)
+    summary = commands.add_parser("report", allow_abbrev=False,
+                                  help="tables and plots from a sweep's netCDF file")
+    summary.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
+    summary.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
+    summary.set_defaults(handler=_report)
 
-    commands.add_parser("bench", add_help=False, help="speed and accuracy benchmarks (see `dlasweep bench -h`)")
+    commands.add_parser("bench", add_help=False,
+                        help="speed and accuracy benchmarks (see `dlasweep bench -h`)")
     return parser
 
 
@@ -107,29 +110,24 @@ def _grow(args) -> int:
     if out.suffix.lower() not in GROW_SUFFIXES:
         raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
     _check_writable(out)
-    if args.n < 1:
-        raise UsageError(f"-n: {args.n} is below 1")
+    if not 1 <= args.n <= MAX_PARTICLES:
+        raise UsageError(f"-n: {args.n} is not in [1, {MAX_PARTICLES}]")
     if args.seed < 0:
         raise UsageError(f"--seed: {args.seed} is negative")
     try:
-        given = {k: _params.coerce(k, getattr(args, k)) for k in _params.DEFAULTS if getattr(args, k) is not None}
+        given = {k: _params.coerce(k, getattr(args, k))
+                 for k in _params.DEFAULTS if getattr(args, k) is not None}
         _params.resolve(**given)
     except ValueError as err:
         raise UsageError(f"--{err}") from None
-    draw = None
-    if out.suffix.lower() != ".nc":
-        try:
-            from .report import draw_cluster as draw
-        except ImportError:
-            raise Unavailable(f"{out.suffix} output needs report.draw_cluster, which this version lacks") from None
 
     cluster = grow(args.n, args.seed, **given)
     if cluster.status != "ok":
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
-    if draw is None:
+    if out.suffix.lower() == ".nc":
         store.save(store.cluster_dataset(cluster, args.seed), out)
     else:
-        draw(cluster.points, cluster.params, out)
+        draw_cluster(cluster.points, cluster.params, out)
     print(f"{out}: {cluster.n} particles")
     return 0
 
@@ -167,6 +165,9 @@ def _report(args) -> int:
     outdir = args.output or args.dataset.with_suffix("")
     _check_writable(outdir, folder=True)
     ds = store.open_sweep(args.dataset)
+    if "box_count" not in ds:
+        ds.close()
+        raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
     try:
         report(ds, outdir)
     finally:

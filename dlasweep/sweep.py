@@ -338,8 +338,8 @@ def _assemble(spec, parts, scratch: Path):
             if str(result["error"]):
                 failed.append((task.key, str(result["error"])))
     total = sum(sizes)
-    ragged = {name: np.memmap(scratch / name, dtype, mode="r", shape=(total,)) if total else np.zeros(0, dtype)
-              for name, dtype in columns.items()}
+    ragged = {name: np.memmap(scratch / name, dtype, mode="r", shape=(total,))
+              if total else np.zeros(0, dtype) for name, dtype in columns.items()}
 
     # Keep scales up to the first at which every cluster fits in one box.
     fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)

@@ -69,6 +69,14 @@ def run_cli(capsys):
     return run
 
 
+def science(ds):
+    """The variables that must be bit-identical between runs (timings aside), clusters included."""
+    from dlasweep.store import SCIENCE
+
+    names = [*SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]
+    return ds[names].drop_attrs(deep=False).load()
+
+
 def files_under(path: Path) -> set:
     """Every file and folder below ``path``, relative to it."""
     return {p.relative_to(path) for p in Path(path).rglob("*")}

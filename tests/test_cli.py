@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import dlasweep as dla
-from conftest import TINY_SPEC, files_under
+from conftest import TINY_SPEC, files_under, science
 from dlasweep import store
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
@@ -48,11 +48,13 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["report", "absent.nc"], "absent.nc"),
     (["report", "spec.toml"], "not a readable netCDF"),
     (["report", "spec.toml", "-o", "missing/report"], "missing"),
+    (["report", "one.nc"], "one cluster"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "spec.toml").write_text(TINY_SPEC)
     (tmp_path / "bad.toml").write_text(BAD_SPEC)
+    store.save(store.cluster_dataset(dla.grow(5, 0), seed=0), tmp_path / "one.nc")
     before = files_under(tmp_path)
     status, out, err = run_cli(*argv)
     assert status == 2, err
@@ -125,11 +127,10 @@ def test_sweep_end_to_end_on_a_running_scheduler(tiny_sweep):
         subprocess.run(["ncdump", "-h", str(out)], check=True, capture_output=True)
 
 
-def test_report_of_the_sweep(tiny_sweep, run_cli):
-    folder = tiny_sweep[3]
-    status, _, err = run_cli("report", folder / "tiny.nc", "-o", folder / "report")
+def test_report_of_the_sweep(tiny_sweep, run_cli, tmp_path):
+    status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "report")
     assert status == 0, err
-    assert any((folder / "report").glob("*.png"))
+    assert any((tmp_path / "report").glob("*.png"))
 
 
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
@@ -147,8 +148,7 @@ def test_sweep_with_the_embedded_cluster_matches(run_cli, write_spec, tmp_path, 
     assert status == 0, err
     reference = dla.run_sweep(dla.load_spec(write_spec()), client=dask_client)
     with store.open_sweep(out) as ds:
-        names = [*store.SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]
-        xr.testing.assert_equal(ds[names].load(), reference[names])
+        xr.testing.assert_identical(science(ds), science(reference))
 
 
 def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_cluster, monkeypatch):

@@ -113,15 +113,6 @@ def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
     assert "⚠" in (tmp_path / "summary.md").read_text()
 
 
-@pytest.mark.slow
-def test_report_of_a_64_cluster_sweep_takes_under_30_seconds(tmp_path):
-    ds = synthetic_sweep({"stickiness": [1.0, 0.7, 0.5, 0.3]}, counts=(300, 1000, 3000), seeds=16)
-    assert ds.sizes["cluster"] == 64
-    start = time.perf_counter()
-    report(ds, tmp_path)
-    assert time.perf_counter() - start < 30
-
-
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_draw_cluster_writes_a_picture(tmp_path, suffix):
     from dlasweep.report import draw_cluster

@@ -15,14 +15,9 @@ import xarray as xr
 from distributed import Client, LocalCluster
 
 import dlasweep as dla
-from conftest import TINY_SPEC
+from conftest import TINY_SPEC, science
 from dlasweep import measure, store, sweep
 from dlasweep.spec import parse_spec
-
-
-def science(ds):
-    """The variables that must be bit-identical between runs, clusters included."""
-    return ds[[*store.SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]].drop_attrs(deep=False).load()
 
 
 @pytest.fixture(scope="module")

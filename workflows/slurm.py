@@ -2,7 +2,10 @@
 
     pip install 'dlasweep[slurm]'
     python workflows/slurm.py workflows/quick.toml -o results/quick.nc \\
-        --queue normal --account myproject --max-jobs 20
+        --queue normal --account myproject --max-jobs 20 \\
+        --prologue 'source /path/to/dlasweep/.venv/bin/activate'
+
+``--dry-run`` prints the SLURM job script and stops.
 
 The scheduler runs in this process (run it on a login node or in a small
 job of its own); SLURM jobs of ``--cores`` single-threaded workers are
@@ -35,6 +38,7 @@ def main(argv=None) -> int:
     parser.add_argument("--max-jobs", type=int, default=10, help="most jobs at once")
     parser.add_argument("--prologue", action="append", default=[],
                         help="shell line to run before each worker starts (e.g. activating the venv)")
+    parser.add_argument("--dry-run", action="store_true", help="print the job script and stop")
     args = parser.parse_args(argv)
 
     try:
@@ -56,6 +60,9 @@ def main(argv=None) -> int:
         worker_extra_args=["--lifetime", args.lifetime, "--lifetime-stagger", "4m"],
     )
     with cluster:
+        if args.dry_run:
+            print(cluster.job_script())
+            return 0
         cluster.adapt(minimum_jobs=0, maximum_jobs=args.max_jobs)
         sweep = ["sweep", args.spec, "--scheduler", cluster.scheduler_address]
         if args.output:
