@@ -38,24 +38,52 @@ def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
     return 2.0 ** (np.arange(top + 1) / per_octave)
 
 
+_SLOTS = 4
+"""Slabs of marks kept along the first axis: boxes arrive at most 2 slabs behind the furthest one seen."""
+
+_DENSE_CAP = 1 << 22
+"""Largest slab (boxes across the other axes) or first-axis range handled with dense arrays; beyond, sorting."""
+
+
 @jit
-def _occupied_boxes(points, origin, scale, radius, shape, bitmap, keys):
-    """Write the row-major index of every box of side ``scale`` a particle touches to ``keys``.
+def _first_axis_order(points, top):
+    """``points`` sorted by the integer part of the first coordinate (a stable counting sort)."""
+    n = len(points)
+    start = np.zeros(top + 2, np.int64)
+    for i in range(n):
+        start[np.int64(np.floor(points[i, 0])) + 1] += 1
+    for c in range(1, top + 2):
+        start[c] += start[c - 1]
+    out = np.empty_like(points)
+    for i in range(n):
+        c = np.int64(np.floor(points[i, 0]))
+        out[start[c]] = points[i]
+        start[c] += 1
+    return out
+
+
+@jit
+def _occupied_boxes(points, origin, scale, radius, shape, marks, out):
+    """Count the boxes of side ``scale`` that the particles touch; write them to ``out``.
 
     ``radius == 0`` puts each particle in the one box holding its centre;
-    ``radius > 0`` puts it in every box its ball overlaps. With a non-empty
-    ``bitmap`` (one zeroed bit per box) each box is written once and the bitmap
-    is zeroed again on return; with an empty one every visit is written.
-    Returns the number of keys written.
+    ``radius > 0`` in every box its ball overlaps. With ``marks`` of shape
+    ``(_SLOTS, boxes across axes 1..)`` filled with -1, each box is counted
+    and written once; this needs ``points`` ordered along the first axis
+    (see ``_first_axis_order``). With empty ``marks`` every visit is counted.
+    Writing stops when ``out`` is full; the count goes on.
     """
     n, dim = points.shape
+    dedup = marks.shape[0] > 0
     stride = np.ones(dim, np.int64)
-    for a in range(dim - 2, -1, -1):
+    for a in range(dim - 2, 0, -1):
         stride[a] = stride[a + 1] * shape[a + 1]
+    # The first-axis box each slab currently holds marks for; a mark equal to
+    # it means "counted", so slabs are reused without clearing.
+    owner = np.full(max(marks.shape[0], 1), -1, np.int64)
     lo = np.empty(dim, np.int64)
     hi = np.empty(dim, np.int64)
     box = np.empty(dim, np.int64)
-    use_bitmap = bitmap.size > 0
     r2 = radius * radius
     count = 0
     for i in range(n):
@@ -80,19 +108,22 @@ def _occupied_boxes(points, origin, scale, radius, shape, bitmap, keys):
                     gap = max(box[a] * scale - u, u - (box[a] + 1) * scale, 0.0)
                     d2 += gap * gap
                 inside = d2 < r2
-            if inside:
-                key = np.int64(0)
-                for a in range(dim):
-                    key += box[a] * stride[a]
-                if use_bitmap:
-                    bit = np.uint8(1 << (key & 7))
-                    if (bitmap[key >> 3] & bit) == 0:
-                        bitmap[key >> 3] |= bit
-                        keys[count] = key
-                        count += 1
-                else:
-                    keys[count] = key
-                    count += 1
+            new = inside
+            if inside and dedup:
+                slot = box[0] % _SLOTS
+                if owner[slot] != box[0]:
+                    if owner[slot] > box[0]:
+                        raise RuntimeError("box_counts: points not ordered along the first axis")
+                    owner[slot] = box[0]
+                rest = np.int64(0)
+                for a in range(1, dim):
+                    rest += box[a] * stride[a]
+                new = marks[slot, rest] != box[0]
+                marks[slot, rest] = box[0]
+            if new:
+                if count < len(out):
+                    out[count] = box
+                count += 1
             # Odometer over the (at most 2 per axis) candidate boxes.
             a = dim - 1
             while a >= 0 and box[a] == hi[a]:
@@ -101,10 +132,6 @@ def _occupied_boxes(points, origin, scale, radius, shape, bitmap, keys):
             if a < 0:
                 break
             box[a] += 1
-    # Clearing only what was set keeps one bitmap reusable for every grid.
-    if use_bitmap:
-        for c in range(count):
-            bitmap[keys[c] >> 3] = 0
     return count
 
 
@@ -112,21 +139,42 @@ def _grid_shape(high, origin, scale, radius):
     return np.floor((high + radius - origin) / scale).astype(np.int64) + 1
 
 
-def _boxes(points, high, origin, scale, radius, bitmap, keys, keep):
-    """Count the distinct boxes the particles touch; with ``keep`` also return them.
+def _boxes(points, high, origin, scale, radius, ordered, index, capacity):
+    """Count the distinct boxes of one grid; also return them when there are at most ``capacity``.
 
-    ``high`` is the componentwise maximum of ``points``; ``bitmap`` and
-    ``keys`` are scratch space (see ``_occupied_boxes``), the bitmap used when
-    the grid fits in it, a sort of all visits otherwise. The boxes come back
-    as an (m, dim) array of grid indices.
+    ``high`` is the componentwise maximum of ``points``. Marks per slab of
+    the first axis (``_occupied_boxes``) need ``ordered`` points and a slab
+    of at most ``_DENSE_CAP`` boxes; otherwise every visit is written and
+    sorted. The boxes come back as an (m, dim) array of grid indices, or None.
     """
     shape = _grid_shape(high, origin, scale, radius)
-    if int(np.prod(shape.astype(object))) <= 8 * bitmap.size:
-        unique = keys[: _occupied_boxes(points, origin, scale, radius, shape, bitmap, keys)]
-    else:
-        visited = np.sort(keys[: _occupied_boxes(points, origin, scale, radius, shape, bitmap[:0], keys)])
-        unique = visited[np.r_[True, visited[1:] != visited[:-1]]]
-    return len(unique), (np.stack(np.unravel_index(unique, tuple(shape)), axis=1) if keep else None)
+    slab = int(np.prod(shape[1:].astype(object)))
+    if ordered and slab <= _DENSE_CAP:
+        marks = np.full((_SLOTS, slab), -1, index)
+        out = np.empty((capacity, len(shape)), index)
+        count = _occupied_boxes(points, origin, scale, radius, shape, marks, out)
+        return count, (out[:count].copy() if count <= capacity else None)
+    visits = 2 ** len(shape) if radius > 0.0 else 1
+    out = np.empty((len(points) * visits, len(shape)), index)
+    boxes = np.unique(out[: _occupied_boxes(points, origin, scale, radius, shape, np.empty((0, 0), index), out)], axis=0)
+    return len(boxes), (boxes if len(boxes) <= capacity else None)
+
+
+def _coarsening_parents(scales, offsets):
+    """Map each scale that is ``r`` times a smaller one (r >= 2, a multiple of ``offsets``) to the largest such.
+
+    Every grid of side ``r * t``, at any of the offsets, coarsens the
+    unshifted grid of side t, since its shift ``j * r / offsets`` is a whole
+    number of t-boxes: its count follows exactly from the occupied t-boxes.
+    """
+    parent = {}
+    for k, s in enumerate(scales):
+        ratio = np.round(s / scales)
+        fits = (ratio >= 2) & (ratio % offsets == 0) & np.isclose(scales * ratio, s, rtol=1e-9, atol=0.0)
+        if fits.any():
+            candidates = np.flatnonzero(fits)
+            parent[k] = int(candidates[np.argmax(scales[candidates])])
+    return parent
 
 
 def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
@@ -160,9 +208,10 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     scales : ndarray of float64
     counts : ndarray of int64
     """
-    p = np.asarray(points, dtype=np.float64)
+    p = np.asarray(points)
     if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) == 0:
         raise ValueError(f"points: expected a non-empty (n, 2) or (n, 3) array, got shape {p.shape}")
+    p = p.astype(np.int64 if p.dtype.kind in "iub" else np.float64, copy=False)
     if not np.isfinite(p).all():
         raise ValueError("points: every coordinate must be finite")
     if offsets < 1:
@@ -176,42 +225,37 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     if len(scales) == 0 or not (scales >= 1.0).all():
         raise ValueError("scales: expected box sides >= 1 (the particle size)")
     radius = 0.0 if lattice else _HALF
-    # Row-major order of the unit cells keeps the bitmap accesses local.
-    p = np.ascontiguousarray(p[np.lexsort(np.floor(p).T[::-1])])
-    # Scratch: one bit per box of the finest grid (capped; larger grids are
-    # sorted instead) and room for every particle's candidate boxes.
-    finest = _grid_shape(high, -_HALF - scales.min(), scales.min(), radius)
-    bitmap = np.zeros(min(int(np.prod(finest.astype(object))), 2**30) // 8 + 1, np.uint8)
-    keys = np.empty(len(p) * (2 ** p.shape[1] if radius > 0.0 else 1), np.int64)
-    # Every grid of side s = ratio * t, at any of the offsets, coarsens the
-    # unshifted grid of side t, since its shift is a whole number of t-boxes.
-    # Counting such a scale from the (far fewer) occupied t-boxes is exact and
-    # costs a fraction of a pass over the points.
-    ratio = offsets * int(np.ceil(2 / offsets))
-    finer = {}
-    for k, s in enumerate(scales):
-        match = np.flatnonzero(np.isclose(scales[:k] * ratio, s, rtol=1e-9, atol=0.0))
-        if len(match):
-            finer[k] = int(match[0])
-    coarser = {t: k for k, t in finer.items()}
+    # Box indices in int32 halve the memory traffic; int64 only for huge extents.
+    index = np.int32 if extent + 2 < 2**31 else np.int64
+    if p.dtype.kind == "i":
+        p = p.astype(index)
+    ordered = high[0] <= max(_DENSE_CAP, len(p))
+    if ordered:
+        p = _first_axis_order(p, int(high[0]))
+    parent = _coarsening_parents(scales, offsets)
+    children = {}
+    for k, m in parent.items():
+        children.setdefault(m, []).append(k)
     counts = np.empty(len(scales), np.int64)
-    for k in range(len(scales)):
-        if k in finer:
-            continue
-        occupied = None
-        while k is not None:
-            if occupied is None:
-                grids = [(p, high, np.full(p.shape[1], -_HALF - (j / offsets) * scales[k]), scales[k], radius)
-                         for j in range(offsets)]
-            else:
-                centres = occupied + 0.5
-                top = centres.max(axis=0)
-                grids = [(centres, top, np.full(p.shape[1], -j * ratio / offsets), float(ratio), 0.0) for j in range(offsets)]
-            keep = k in coarser
-            results = [_boxes(*grid, bitmap, keys, keep and j == 0) for j, grid in enumerate(grids)]
-            counts[k] = min(count for count, _ in results)
-            occupied = results[0][1]
-            k = coarser.get(k)
+    # Depth first, so that only the occupied boxes on the current chain of
+    # coarsenings are held; None means "from the points".
+    pending = [(k, None) for k in range(len(scales)) if k not in parent]
+    while pending:
+        k, boxes = pending.pop()
+        if boxes is None:
+            grids = [(p, high, np.full(p.shape[1], -_HALF - (j / offsets) * scales[k]), scales[k], radius, ordered)
+                     for j in range(offsets)]
+        else:
+            ratio = round(scales[k] / scales[parent[k]])
+            # Box centres in units of the finer box, the finer grid's corner at
+            # 0. The boxes arrive in first-axis order (sorted, or as written).
+            grids = [(boxes, boxes.max(axis=0), np.full(p.shape[1], -_HALF - j * ratio // offsets), float(ratio), 0.0, True)
+                     for j in range(offsets)]
+        # Coarser scales start from these boxes only while they are fewer than the points.
+        capacity = len(p) if k in children else 0
+        results = [_boxes(*grid, index, capacity if j == 0 else 0) for j, grid in enumerate(grids)]
+        counts[k] = min(count for count, _ in results)
+        pending += [(child, results[0][1]) for child in children.get(k, [])]
     return scales, counts
 
 

@@ -380,6 +380,10 @@ def _local_slopes(sweep, path):
 
 
 def _dimension_vs_n(sweep, path):
+    means = [sweep.summary[config, k][f"D_{prefix}_mean"] for config in sweep.configs[:10]
+             for k in range(len(sweep.counts)) for prefix, _ in ESTIMATORS]
+    if not np.isfinite(means).any():
+        return None  # no fit passed its checks: nothing to draw
     fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
         for e, (prefix, name) in enumerate(ESTIMATORS):

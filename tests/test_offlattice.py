@@ -74,7 +74,10 @@ def test_no_overlap_and_exact_contact(name):
     params = {**OFF, **VARIANTS.get(name, GAUSS.get(name))}
     c = dla.grow(400, seed=3, **params)
     assert c.points.dtype == np.float64 and c.points.shape[1] == c.params["dim"]
-    assert c.status == "ok" or (name == "line-box" and c.status == "boundary" and c.n > 100), c.status
+    if name.startswith("walkers"):  # at most one particle per walker
+        assert c.status == "exhausted" and c.n > 10
+    else:
+        assert c.status == "ok" or (name == "line-box" and c.status == "boundary" and c.n > 100), c.status
     assert min_pair(c.points, c.params) >= 1.0 - 1e-9
     near = contacts(c.points, c.params)
     # every particle touches an earlier one (or the substrate): distance 1
@@ -138,7 +141,7 @@ def _wos_exterior(dim, r0, far, n, rng, eps=1e-7):
         idx = np.flatnonzero(alive)
         r = np.linalg.norm(x[idx], axis=1)
         back = r - 1 < eps
-        out = r > far
+        out = r > far * (1 - 1e-9)
         hit[idx[back]] = True
         alive[idx[back | out]] = False
         idx = idx[~(back | out)]
