@@ -11,7 +11,7 @@ from .measure import box_counts, radius_of_gyration
 from .fit import fit_dimension
 from .spec import load_spec
 from .sweep import run_sweep
-from .store import open_sweep
+from .store import cluster_points, open_sweep
 from .report import report
 
 __all__ = [
@@ -23,6 +23,7 @@ __all__ = [
     "load_spec",
     "run_sweep",
     "open_sweep",
+    "cluster_points",
     "report",
     "__version__",
 ]

@@ -30,6 +30,7 @@ COUNTS = {
     "offlattice-3d": [10_000, 100_000],
 }
 NAIVE_COUNTS = [1_000, 3_000]
+QUICK_COUNT = 2_000
 
 _PROBE = """
 import json, resource, sys, time
@@ -67,9 +68,9 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
     rows = []
     plan = []
     for name, params in MODELS.items():
-        counts = COUNTS[name][:1] if quick else COUNTS[name] + ([10_000_000] if full and "2d" in name else [])
+        counts = [QUICK_COUNT] if quick else COUNTS[name] + ([10_000_000] if full and "2d" in name else [])
         plan += [(name, "exact", params, n) for n in counts]
-    naive_counts = NAIVE_COUNTS[:1] if quick else NAIVE_COUNTS
+    naive_counts = [QUICK_COUNT // 4] if quick else NAIVE_COUNTS
     for n in naive_counts:
         plan.append(("lattice-2d", "exact", MODELS["lattice-2d"], n))
         plan.append(("lattice-2d", "naive", {**MODELS["lattice-2d"], **NAIVE}, n))

@@ -19,7 +19,7 @@ from pathlib import Path
 from . import __version__, store
 from . import params as _params
 from .grow import grow
-from .report import draw_cluster, report
+from .report import draw_cluster, plot_bench, report
 from .spec import MAX_PARTICLES, SpecError, load_spec
 from .sweep import ResumeError, run_sweep
 
@@ -28,10 +28,6 @@ GROW_SUFFIXES = (".nc", ".png", ".svg")
 
 class UsageError(ValueError):
     """A bad command line; the message names the option."""
-
-
-class Unavailable(RuntimeError):
-    """A feature this installation lacks; a run-time failure without a traceback."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -46,9 +42,6 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     command = "dlasweep"
     try:
-        if argv[:1] == ["bench"]:
-            command = "dlasweep bench"
-            return _bench(argv[1:])
         args = _parser().parse_args(argv)
         command = f"dlasweep {args.command}"
         return args.handler(args)
@@ -62,7 +55,7 @@ def main(argv=None) -> int:
         _say(f"{command}: {_one_line(err)}")
         return 2
     except Exception as err:
-        if not isinstance(err, (OSError, TimeoutError, Unavailable)):
+        if not isinstance(err, (OSError, TimeoutError)):
             traceback.print_exc()  # a bug: show where
         _say(f"{command}: failed: {type(err).__name__}: {_one_line(err)}")
         return 1
@@ -100,8 +93,13 @@ def _parser() -> argparse.ArgumentParser:
     summary.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
     summary.set_defaults(handler=_report)
 
-    commands.add_parser("bench", add_help=False,
-                        help="speed and accuracy benchmarks (see `dlasweep bench -h`)")
+    timing = commands.add_parser("bench", allow_abbrev=False,
+                                 help="kernel speed, memory and cost scaling into results/bench")
+    timing.add_argument("-o", "--output", type=Path, default=Path("results/bench"), help="output folder")
+    size = timing.add_mutually_exclusive_group()
+    size.add_argument("--full", action="store_true", help="add N = 1e7 for the 2D models")
+    size.add_argument("--quick", action="store_true", help="only the smallest N (a smoke test)")
+    timing.set_defaults(handler=_bench)
     return parser
 
 
@@ -176,13 +174,26 @@ def _report(args) -> int:
     return 0
 
 
-def _bench(argv) -> int:
-    """``dlasweep bench ARGS...`` is ``dlasweep.bench.main(ARGS)``, which parses its own options."""
-    try:
-        from .bench import main as bench_main
-    except ImportError as err:
-        raise Unavailable(f"not available ({err})") from None
-    return bench_main(argv)
+def _bench(args) -> int:
+    from .bench import analysis_bench, run_bench
+
+    out = args.output
+    _check_writable(out, folder=True)
+    lines = []
+
+    def echo(line):
+        print(line, flush=True)
+        lines.append(line)
+
+    ds = run_bench(full=args.full, quick=args.quick, echo=echo)
+    if not args.quick:
+        ds.attrs.update({f"analysis_{k}": v for k, v in analysis_bench(echo=echo).items()})
+    out.mkdir(parents=True, exist_ok=True)
+    store.save(ds, out / "bench.nc")
+    plot_bench(ds, out)
+    (out / "bench.txt").write_text("\n".join(["$ dlasweep bench " + " ".join(sys.argv[2:]), *lines, ""]))
+    print(f"{out}: bench.nc, bench.png, bench.txt")
+    return 0
 
 
 def _check_writable(path: Path, folder=False):

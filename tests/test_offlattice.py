@@ -256,15 +256,16 @@ def _dimension_from_history(clusters, lo_frac):
 
 
 def test_fractal_dimension_2d():
-    """D = 1.71 for 2D DLA; the fit over N in [1000, 10000] of 4 clusters.
+    """D = 1.71 for 2D DLA; one fit over N in [1000, 10000] of 6 clusters.
 
-    Each cluster's Rg history fluctuates by a few percent (sigma(D) ~ 0.03
-    for this ensemble) and small clusters read slightly high; we accept
-    1.63..1.81.
+    One cluster's history gives D with a spread of 0.05 (measured over 12
+    clusters: mean 1.717 +- 0.015, 1.733 over N in [3e3, 3e4], so the
+    finite-size drift is small here); 6 clusters give sigma ~ 0.02, and we
+    accept 1.71 +- 0.08 (3 sigma plus the finite-size drift).
     """
-    clusters = [dla.grow(10_000, seed=s, **OFF) for s in range(4)]
+    clusters = [dla.grow(10_000, seed=s, **OFF) for s in range(6)]
     D = _dimension_from_history(clusters, 0.1)
-    assert 1.63 < D < 1.81, D
+    assert 1.63 < D < 1.79, D
 
 
 def test_fractal_dimension_3d():

@@ -1,0 +1,22 @@
+"""The benchmark runs end to end (its numbers are for people, not for asserts)."""
+
+import xarray as xr
+
+from dlasweep.cli import main
+
+
+def test_bench_quick_writes_its_outputs(tmp_path):
+    assert main(["bench", "--quick", "-o", str(tmp_path / "bench")]) == 0
+    for name in ("bench.nc", "bench.png", "bench.txt"):
+        assert (tmp_path / "bench" / name).stat().st_size > 0
+    with xr.open_dataset(tmp_path / "bench" / "bench.nc") as ds:
+        assert set(ds.model.values) == {"lattice-2d", "offlattice-2d", "lattice-3d", "offlattice-3d"}
+        assert (ds.seconds > 0).all() and (ds.n_grown > 0).all()
+        assert "naive" in set(ds.method.values)
+
+
+def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
+    target = tmp_path / "taken"
+    target.write_text("x")
+    assert main(["bench", "--quick", "-o", str(target)]) == 2
+    assert "-o" in capsys.readouterr().err
