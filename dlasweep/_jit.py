@@ -3,6 +3,11 @@
 ``cache`` keeps compiled kernels on disk so that each dask worker compiles
 once; ``nogil`` lets threads of one worker share it; ``fastmath`` stays off so
 that results are bit-identical wherever they are computed.
+
+numba's cache checks only the defining file of a function: after editing a
+helper in another module, delete ``dlasweep/**/__pycache__/*.nb[ic]`` or the
+callers keep the old machine code. An install replaces every file, so users
+are not affected.
 """
 
 import time
@@ -11,8 +16,12 @@ import warnings
 import numba
 from numba.core.errors import NumbaWarning
 
-jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+_SETTINGS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
+jit = numba.njit(**_SETTINGS)
 """Decorator for every kernel."""
+inline = numba.njit(**_SETTINGS, inline="always")
+"""Decorator for small scalar helpers inlined at numba level. Measured: on the
+lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
 
 # The clock below needs object mode for an instant per checkpoint; numba warns
 # that such a block takes the GIL, which is what we want there.

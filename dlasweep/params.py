@@ -119,6 +119,8 @@ def resolve(**params) -> dict:
     kf = p["kill_factor"] = _kind("kill_factor", p["kill_factor"], float)
     if kf != 0.0 and kf <= 1.0:
         raise ValueError(f"kill_factor: {kf} must be 0 (exact return) or > 1")
+    if kf != 0.0 and p["launch"] == "box":
+        raise ValueError("kill_factor: a kill circle needs launch='circle' (box launches start outside it)")
     p["jumps"] = _kind("jumps", p["jumps"], bool)
     st = p["step"] = _kind("step", p["step"], float)
     if st < 0.0:

@@ -178,6 +178,7 @@ def test_stickiness_makes_denser_clusters(model):
         (dict(neighbours=5), "neighbours"),
         (dict(kill_factor=0.5), "kill_factor"),
         (dict(kill_factor=1.0), "kill_factor"),
+        (dict(kill_factor=2.0, size=64, launch="box"), "kill_factor"),
         (dict(launch="box"), "launch"),
         (dict(step=0.5), "step"),
         (dict(walkers=10), "walkers"),

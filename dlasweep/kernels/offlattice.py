@@ -59,15 +59,12 @@ map query, the direction draw and the list scans, and calls out only for
 rare events.
 """
 
-import numba
 import numpy as np
 
-from .._jit import clock, jit
+from .._jit import clock, inline, jit
 from . import maps
 from .walk import return_to_plane, return_to_sphere
 
-ijit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", inline="always")
-"""``_jit.jit`` inlined at numba level; only for scalar-only helpers."""
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -94,7 +91,7 @@ INF = np.inf
 # ------------------------------------------------------------------ rng -----
 
 
-@ijit
+@inline
 def _xo(s0, s1, s2, s3):
     """xoshiro256+ step: new state and a double in [0, 1)."""
     r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
@@ -108,7 +105,7 @@ def _xo(s0, s1, s2, s3):
     return s0, s1, s2, s3, r
 
 
-@ijit
+@inline
 def _xdir(s0, s1, s2, s3, dim):
     """Uniform unit vector by rejection from the unit disk (2D: normalise;
     3D: Marsaglia's map), without sin/cos."""
@@ -308,7 +305,7 @@ def _map_dist(w, dim, size, gi, words, start, blocks, cells):
     return side + f
 
 
-@ijit
+@inline
 def _span(v, r, nc, periodic, origin, inv):
     """Index cells covering [v - r, v + r] on one axis (may wrap if periodic)."""
     lo = int(np.floor((v - r - origin) * inv))
