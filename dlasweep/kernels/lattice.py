@@ -18,6 +18,7 @@ from .walk import below, direction, return_to_plane, return_to_sphere
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
 JUMP_MARGIN = 2.0  # sites kept between a jump's circle and the nearest particle
+FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, in cells of 4 sites
 
 
 def _moves(dim, moore):
@@ -36,10 +37,11 @@ def _site(x):
 
 
 @jit
-def _mark_images(words, dim, start, blocks, cells, width, off, q, period):
+def _mark_images(words, dim, start, blocks, cells, field, width, off, q, period):
     """Mark a particle at site q, with its periodic images for substrates."""
     reach = 1 if period > 0 else 0
     zreach = reach if dim == 3 else 0
+    cap = FIELD_CAP[dim]
     for a in range(-reach, reach + 1):
         for b in range(-zreach, zreach + 1):
             i = q[0] + a * period + off
@@ -47,17 +49,19 @@ def _mark_images(words, dim, start, blocks, cells, width, off, q, period):
             k = q[2] + off
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 maps.mark(words, dim, start, blocks, cells, i, j, k)
+                maps.field_mark(field, dim, width, i, j, k, cap)
 
 
 @jit
 def _rebuild(points, count, dim, width, off, period):
     words, start, blocks, cells = maps.allocate(dim, width)
+    field = maps.field_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
     for p in range(count):
         for a in range(dim):
             q[a] = points[p, a]
-        _mark_images(words, dim, start, blocks, cells, width, off, q, period)
-    return words, start, blocks, cells
+        _mark_images(words, dim, start, blocks, cells, field, width, off, q, period)
+    return words, start, blocks, cells, field
 
 
 @jit
@@ -180,7 +184,7 @@ def _grow(
                 points[p, a] = (p >> a) & 1
     for p in range(count):
         r_max = max(r_max, np.sqrt(np.sum(points[p].astype(np.float64) ** 2)))
-    words, start, blocks, cells = _rebuild(points, count, dim, width, off, period)
+    words, start, blocks, cells, field = _rebuild(points, count, dim, width, off, period)
 
     mi = 0
     while mi < len(marks) and marks[mi] <= count:
@@ -293,6 +297,8 @@ def _grow(
             i, j, k = q[0] + off, q[1] + off, q[2] + off
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
+                # the site rounds the walker's position by at most half a site per axis
+                bound = max(bound, maps.field_bound(field, dim, width, i, j, k) - 0.5 * np.sqrt(dim))
                 # unmarked periodic images lie at least one period away
                 free = max(free, min(bound, float(period)) if line else bound)
             if line:
@@ -339,9 +345,9 @@ def _grow(
                 width *= 2
                 if not line:
                     off = width // 2
-                words, start, blocks, cells = _rebuild(points, count, dim, width, off, period)
+                words, start, blocks, cells, field = _rebuild(points, count, dim, width, off, period)
             else:
-                _mark_images(words, dim, start, blocks, cells, width, off, q, period)
+                _mark_images(words, dim, start, blocks, cells, field, width, off, q, period)
             while mi < len(marks) and marks[mi] <= count:
                 times[mi] = clock() - t0
                 mi += 1

@@ -143,3 +143,50 @@ def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
     if dim == 3:
         near = min(near, k & mask, side - 1 - (k & mask))
     return s, float(side + near) + 0.5
+
+
+FIELD_SHIFT = 2
+"""The distance field works on coarse cells of side ``2**FIELD_SHIFT``."""
+
+
+@jit
+def field_allocate(dim, width, cap):
+    """A coarse Chebyshev distance field, every cell at the cap (nothing near)."""
+    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
+    return np.full(fw**dim, np.uint8(cap), np.uint8)
+
+
+@jit
+def field_mark(field, dim, width, i, j, k, cap):
+    """Record a particle in cell (i, j, k): lower the distances within ``cap``.
+
+    ``field[c]`` is the Chebyshev distance, in coarse cells and capped, from
+    cell ``c`` to the nearest coarse cell holding a particle; sharper than the
+    dilated maps near the cluster, where most jumps happen.
+    """
+    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
+    ci, cj, ck = i >> FIELD_SHIFT, j >> FIELD_SHIFT, (k >> FIELD_SHIFT if dim == 3 else 0)
+    here = ci + fw * (cj + fw * ck)
+    if field[here] == 0:
+        return
+    reach = cap - 1
+    klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
+    for c in range(klo, khi + 1):
+        dk = abs(c - ck)
+        for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
+            dj = max(dk, abs(b - cj))
+            row = fw * (b + fw * c)
+            for a in range(max(ci - reach, 0), min(ci + reach, fw - 1) + 1):
+                d = max(dj, abs(a - ci))
+                if d < field[row + a]:
+                    field[row + a] = d
+
+
+@jit
+def field_bound(field, dim, width, i, j, k):
+    """Lower bound on the distance from site (i, j, k) to the nearest particle site."""
+    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
+    ck = k >> FIELD_SHIFT if dim == 3 else 0
+    d = np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])
+    # d - 1 whole coarse cells lie between the two cells, and sites differ by one more
+    return float(((d - 1) << FIELD_SHIFT) + 1) if d > 0 else 0.0
