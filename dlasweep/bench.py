@@ -130,3 +130,84 @@ def _to_dataset(rows) -> xr.Dataset:
             ds[key].attrs["units"] = units[key]
     ds.attrs["title"] = "dlasweep kernel benchmark"
     return ds
+
+
+REPORT_SPEC = """\
+name = "report-bench"
+[grid]
+n_particles = [1000, 3000, 10000]
+seeds = 64
+[model]
+model = "lattice"
+dim = 2
+[run]
+root_seed = 1
+"""
+"""The sweep whose report ``analysis_bench`` times: 64 lattice clusters of 1e4 particles."""
+
+
+def _tiled_cluster(model: str, n: int = 100_000, tiles: int = 10) -> np.ndarray:
+    """``tiles**2`` translated copies of one 2D cluster of ``n`` particles, 1.25 extents apart, copy after copy."""
+    from .grow import grow
+
+    points = grow(n, seed=1, model=model, dim=2).points
+    step = np.ceil(1.25 * (points.max(axis=0) - points.min(axis=0)).max())
+    shifts = np.stack(np.meshgrid(np.arange(tiles), np.arange(tiles)), axis=-1).reshape(-1, 1, 2) * step
+    return (points[None] + shifts.astype(points.dtype)).reshape(-1, 2)
+
+
+def analysis_bench(echo=print) -> dict:
+    """Time the measurement of a 1e7-particle 2D set and the report of a 64-cluster sweep.
+
+    Growing one 1e7-particle cluster takes minutes, so a stand-in is
+    measured: 100 translated copies (10 x 10, 1.25 cluster extents apart) of
+    one 1e5-particle DLA cluster, lattice and off-lattice. Its extent
+    (about 17 000) and box occupancy are those of a 1e7 cluster, which is
+    what the cost of box counting depends on; the radius of gyration of every
+    prefix costs the same for any 1e7 points (the fitted D of the copies
+    means nothing). The report is of ``REPORT_SPEC``, grown by ``run_sweep``
+    on an embedded cluster before the clock starts. Compilation is excluded.
+
+    Parameters
+    ----------
+    echo : callable
+        Receives one line per measurement.
+
+    Returns
+    -------
+    dict
+        Wall seconds: ``box_<model>`` (``box_counts`` + ``fit_dimension``),
+        ``rg_<model>`` (``radius_of_gyration`` + ``fit_mass_radius``) for
+        ``lattice`` and ``offlattice``, and ``report``.
+    """
+    import tempfile
+    import time
+
+    from .fit import fit_dimension, fit_mass_radius
+    from .measure import box_counts, radius_of_gyration
+    from .report import report
+    from .spec import parse_spec
+    from .sweep import run_sweep
+
+    seconds = {}
+    for model in ("lattice", "offlattice"):
+        points = _tiled_cluster(model)
+        lattice = model == "lattice"
+        box_counts(points[:1000], lattice=lattice)  # load the compiled kernels
+        radius_of_gyration(points[:10])
+        start = time.perf_counter()
+        fit = fit_dimension(*box_counts(points, lattice=lattice))
+        seconds[f"box_{model}"] = time.perf_counter() - start
+        start = time.perf_counter()
+        fit_mass_radius(np.arange(1, len(points) + 1), radius_of_gyration(points))
+        seconds[f"rg_{model}"] = time.perf_counter() - start
+        echo(f"{model} 2D, {len(points)} points: box counting + fit {seconds[f'box_{model}']:.2f} s (D={fit.D:.3f}), "
+             f"Rg of every prefix + fit {seconds[f'rg_{model}']:.2f} s")
+    ds = run_sweep(parse_spec(REPORT_SPEC), client=None, progress=False)
+    with tempfile.TemporaryDirectory() as scratch:
+        start = time.perf_counter()
+        report(ds, scratch)
+        seconds["report"] = time.perf_counter() - start
+    echo(f"report of a {ds.sizes['cluster']}-cluster sweep (N up to {int(ds['n_particles'].max())}): "
+         f"{seconds['report']:.1f} s")
+    return seconds

@@ -39,7 +39,7 @@ def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
 
 
 _SLOTS = 4
-"""Slabs of marks kept along the first axis: boxes arrive at most 2 slabs behind the furthest one seen."""
+"""Slabs of marks along the first axis: a box arrives at most 3 boxes behind the furthest one seen (see ``box_counts``)."""
 
 _DENSE_CAP = 1 << 22
 """Largest slab (boxes across the other axes) or first-axis range handled with dense arrays; beyond, sorting."""
@@ -48,14 +48,13 @@ _DENSE_CAP = 1 << 22
 @jit
 def _first_axis_order(points, top):
     """``points`` sorted by the integer part of the first coordinate (a stable counting sort)."""
-    n = len(points)
     start = np.zeros(top + 2, np.int64)
-    for i in range(n):
+    for i in range(len(points)):
         start[np.int64(np.floor(points[i, 0])) + 1] += 1
     for c in range(1, top + 2):
         start[c] += start[c - 1]
     out = np.empty_like(points)
-    for i in range(n):
+    for i in range(len(points)):
         c = np.int64(np.floor(points[i, 0]))
         out[start[c]] = points[i]
         start[c] += 1
@@ -66,72 +65,65 @@ def _first_axis_order(points, top):
 def _occupied_boxes(points, origin, scale, radius, shape, marks, out):
     """Count the boxes of side ``scale`` that the particles touch; write them to ``out``.
 
+    ``origin`` and ``shape`` are tuples (so the loops over axes unroll).
     ``radius == 0`` puts each particle in the one box holding its centre;
     ``radius > 0`` in every box its ball overlaps. With ``marks`` of shape
     ``(_SLOTS, boxes across axes 1..)`` filled with -1, each box is counted
-    and written once; this needs ``points`` ordered along the first axis
-    (see ``_first_axis_order``). With empty ``marks`` every visit is counted.
-    Writing stops when ``out`` is full; the count goes on.
+    and written once; this needs the first-axis boxes to arrive less than
+    ``_SLOTS`` behind the largest so far. With empty ``marks`` every visit is
+    counted. Writing stops when ``out`` is full; the count goes on.
     """
-    n, dim = points.shape
+    dim = len(origin)
     dedup = marks.shape[0] > 0
-    stride = np.ones(dim, np.int64)
-    for a in range(dim - 2, 0, -1):
-        stride[a] = stride[a + 1] * shape[a + 1]
-    # The first-axis box each slab currently holds marks for; a mark equal to
-    # it means "counted", so slabs are reused without clearing.
-    owner = np.full(max(marks.shape[0], 1), -1, np.int64)
-    lo = np.empty(dim, np.int64)
-    hi = np.empty(dim, np.int64)
-    box = np.empty(dim, np.int64)
+    # The first-axis box each slab holds marks for; a mark equal to it means
+    # "counted", so a slab is reused for a new box without clearing.
+    owner = np.full(_SLOTS, -1, np.int64)
+    home = np.zeros(dim, np.int64)
+    step = np.zeros(dim, np.int64)
+    gap2 = np.zeros(dim)
     r2 = radius * radius
+    corners = 1 << dim if radius > 0.0 else 1
     count = 0
-    for i in range(n):
+    for i in range(len(points)):
         for a in range(dim):
             u = points[i, a] - origin[a]
+            home[a] = np.int64(np.floor(u / scale))
             if radius > 0.0:
-                # Boxes whose interior meets [u - r, u + r] along this axis.
-                lo[a] = np.int64(np.floor((u - radius) / scale))
-                hi[a] = np.int64(np.ceil((u + radius) / scale)) - 1
-            else:
-                lo[a] = np.int64(np.floor(u / scale))
-                hi[a] = lo[a]
-            box[a] = lo[a]
-        while True:
-            inside = True
-            if radius > 0.0:
-                # A ball overlaps a box iff the box's nearest point is within r;
-                # this drops the corner boxes that only the bounding cube reaches.
-                d2 = 0.0
-                for a in range(dim):
-                    u = points[i, a] - origin[a]
-                    gap = max(box[a] * scale - u, u - (box[a] + 1) * scale, 0.0)
-                    d2 += gap * gap
-                inside = d2 < r2
-            new = inside
-            if inside and dedup:
-                slot = box[0] % _SLOTS
-                if owner[slot] != box[0]:
-                    if owner[slot] > box[0]:
-                        raise RuntimeError("box_counts: points not ordered along the first axis")
-                    owner[slot] = box[0]
-                rest = np.int64(0)
-                for a in range(1, dim):
-                    rest += box[a] * stride[a]
-                new = marks[slot, rest] != box[0]
-                marks[slot, rest] = box[0]
-            if new:
-                if count < len(out):
-                    out[count] = box
-                count += 1
-            # Odometer over the (at most 2 per axis) candidate boxes.
-            a = dim - 1
-            while a >= 0 and box[a] == hi[a]:
-                box[a] = lo[a]
-                a -= 1
-            if a < 0:
-                break
-            box[a] += 1
+                # With s >= 2r a ball reaches at most across the nearer face of
+                # its home box on each axis; this is that face's distance.
+                below = u - home[a] * scale
+                above = (home[a] + 1) * scale - u
+                step[a] = -1 if below <= above else 1
+                gap2[a] = min(below, above) ** 2
+        # Home box, then the neighbours across the near faces (and edges and
+        # corners) whose nearest point lies within r.
+        for corner in range(corners):
+            d2 = 0.0
+            for a in range(dim):
+                if (corner >> a) & 1:
+                    d2 += gap2[a]
+            if corner > 0 and d2 >= r2:
+                continue
+            write = count < len(out)
+            first = home[0] + (step[0] if corner & 1 else 0)
+            if write:
+                out[count, 0] = first
+            rest = 0
+            for a in range(1, dim):
+                b = home[a] + (step[a] if (corner >> a) & 1 else 0)
+                rest = rest * shape[a] + b
+                if write:
+                    out[count, a] = b
+            new = True
+            if dedup:
+                slot = first % _SLOTS
+                if owner[slot] != first:
+                    if owner[slot] > first:
+                        raise RuntimeError("box_counts: boxes arrived out of order")
+                    owner[slot] = first
+                new = marks[slot, rest] != first
+                marks[slot, rest] = first
+            count += new
     return count
 
 
@@ -142,38 +134,33 @@ def _grid_shape(high, origin, scale, radius):
 def _boxes(points, high, origin, scale, radius, ordered, index, capacity):
     """Count the distinct boxes of one grid; also return them when there are at most ``capacity``.
 
-    ``high`` is the componentwise maximum of ``points``. Marks per slab of
-    the first axis (``_occupied_boxes``) need ``ordered`` points and a slab
-    of at most ``_DENSE_CAP`` boxes; otherwise every visit is written and
-    sorted. The boxes come back as an (m, dim) array of grid indices, or None.
+    ``high`` bounds ``points`` componentwise. Marks per slab of the first
+    axis (``_occupied_boxes``) need ``ordered`` points and a slab of at most
+    ``_DENSE_CAP`` boxes; otherwise every visit is written and sorted.
+    Returns the count, the boxes as an (m, dim) array of grid indices of
+    dtype ``index`` (or None) and the grid's shape.
     """
     shape = _grid_shape(high, origin, scale, radius)
     slab = int(np.prod(shape[1:].astype(object)))
+    args = (points, tuple(origin), float(scale), radius, tuple(shape))
     if ordered and slab <= _DENSE_CAP:
-        marks = np.full((_SLOTS, slab), -1, index)
+        # Pages of ``out`` beyond the count are never touched, so never resident.
         out = np.empty((capacity, len(shape)), index)
-        count = _occupied_boxes(points, origin, scale, radius, shape, marks, out)
-        return count, (out[:count].copy() if count <= capacity else None)
-    visits = 2 ** len(shape) if radius > 0.0 else 1
-    out = np.empty((len(points) * visits, len(shape)), index)
-    boxes = np.unique(out[: _occupied_boxes(points, origin, scale, radius, shape, np.empty((0, 0), index), out)], axis=0)
-    return len(boxes), (boxes if len(boxes) <= capacity else None)
+        count = _occupied_boxes(*args, np.full((_SLOTS, slab), -1, index), out)
+        return count, (out[:count] if count <= capacity else None), shape
+    out = np.empty((len(points) * (2 ** len(shape) if radius > 0.0 else 1), len(shape)), index)
+    boxes = np.unique(out[: _occupied_boxes(*args, np.empty((0, 0), index), out)], axis=0)
+    return len(boxes), (boxes if len(boxes) <= capacity else None), shape
 
 
-def _coarsening_parents(scales, offsets):
-    """Map each scale that is ``r`` times a smaller one (r >= 2, a multiple of ``offsets``) to the largest such.
-
-    Every grid of side ``r * t``, at any of the offsets, coarsens the
-    unshifted grid of side t, since its shift ``j * r / offsets`` is a whole
-    number of t-boxes: its count follows exactly from the occupied t-boxes.
-    """
+def _coarsening_parents(scales):
+    """Map each scale that is a whole multiple (>= 2) of smaller ones to the largest of those."""
     parent = {}
     for k, s in enumerate(scales):
         ratio = np.round(s / scales)
-        fits = (ratio >= 2) & (ratio % offsets == 0) & np.isclose(scales * ratio, s, rtol=1e-9, atol=0.0)
-        if fits.any():
-            candidates = np.flatnonzero(fits)
-            parent[k] = int(candidates[np.argmax(scales[candidates])])
+        fits = np.flatnonzero((ratio >= 2) & np.isclose(scales * ratio, s, rtol=1e-9, atol=0.0))
+        if len(fits):
+            parent[k] = int(fits[np.argmax(scales[fits])])
     return parent
 
 
@@ -217,45 +204,56 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     if offsets < 1:
         raise ValueError(f"offsets: {offsets} is below 1")
     # Coordinates from the low corner, so the extreme particles sit exactly
-    # (not within rounding) half a particle inside the first box.
-    p = p - p.min(axis=0)
-    high = p.max(axis=0)
+    # (not within rounding) half a particle inside the first box. Column by
+    # column: numpy reduces an (n, 2) array along axis 0 ten times slower.
+    p = p - np.array([c.min() for c in p.T])
+    high = np.array([c.max() for c in p.T])
     extent = float(high.max()) + 2 * _HALF
     scales = default_scales(extent) if scales is None else np.asarray(scales, dtype=np.float64).ravel()
     if len(scales) == 0 or not (scales >= 1.0).all():
         raise ValueError("scales: expected box sides >= 1 (the particle size)")
     radius = 0.0 if lattice else _HALF
-    # Box indices in int32 halve the memory traffic; int64 only for huge extents.
     index = np.int32 if extent + 2 < 2**31 else np.int64
     if p.dtype.kind == "i":
-        p = p.astype(index)
+        p = p.astype(index)  # half the memory traffic
+    # In order of the first coordinate's integer part, the first-axis boxes a
+    # particle touches (home box +-1) lie at most 3 behind any touched before.
     ordered = high[0] <= max(_DENSE_CAP, len(p))
     if ordered:
         p = _first_axis_order(p, int(high[0]))
-    parent = _coarsening_parents(scales, offsets)
-    children = {}
+    # Grid j of side r * t is a union of boxes of grid (j * r) % offsets of
+    # side t (whole r), since the two corners are (j * r // offsets) t-boxes
+    # apart: its count follows exactly from those boxes, which are fewer
+    # than the particles, and which keep their first-axis order.
+    parent = _coarsening_parents(scales)
+    ratio = {k: round(scales[k] / scales[m]) for k, m in parent.items()}
+    needed, children = {}, {}
     for k, m in parent.items():
+        needed.setdefault(m, set()).update(j * ratio[k] % offsets for j in range(offsets))
         children.setdefault(m, []).append(k)
+    # Keeping at most this many boxes per grid bounds the memory to a few copies of the points.
+    capacity = len(p) * (2 ** (p.shape[1] - 1) if radius > 0.0 else 1)
     counts = np.empty(len(scales), np.int64)
-    # Depth first, so that only the occupied boxes on the current chain of
-    # coarsenings are held; None means "from the points".
+    # Depth first, so that only the boxes on the current chain of
+    # coarsenings are held; None means "from the particles".
     pending = [(k, None) for k in range(len(scales)) if k not in parent]
     while pending:
-        k, boxes = pending.pop()
-        if boxes is None:
-            grids = [(p, high, np.full(p.shape[1], -_HALF - (j / offsets) * scales[k]), scales[k], radius, ordered)
-                     for j in range(offsets)]
-        else:
-            ratio = round(scales[k] / scales[parent[k]])
-            # Box centres in units of the finer box, the finer grid's corner at
-            # 0. The boxes arrive in first-axis order (sorted, or as written).
-            grids = [(boxes, boxes.max(axis=0), np.full(p.shape[1], -_HALF - j * ratio // offsets), float(ratio), 0.0, True)
-                     for j in range(offsets)]
-        # Coarser scales start from these boxes only while they are fewer than the points.
-        capacity = len(p) if k in children else 0
-        results = [_boxes(*grid, index, capacity if j == 0 else 0) for j, grid in enumerate(grids)]
-        counts[k] = min(count for count, _ in results)
-        pending += [(child, results[0][1]) for child in children.get(k, [])]
+        k, finer = pending.pop()
+        kept, best = {}, None
+        for j in range(offsets):
+            if finer is None:
+                source = (p, high, np.full(p.shape[1], -_HALF - (j / offsets) * scales[k]), scales[k], radius, ordered)
+            else:
+                # Centres of the t-boxes in t units, their grid's corner at 0.
+                boxes, top = finer[j * ratio[k] % offsets]
+                source = (boxes, top, np.full(p.shape[1], -_HALF - j * ratio[k] // offsets), float(ratio[k]), 0.0, True)
+            count, boxes, shape = _boxes(*source, index, capacity if j in needed.get(k, ()) else 0)
+            best = count if best is None else min(best, count)
+            if boxes is not None:
+                kept[j] = (boxes, shape - 1)
+        counts[k] = best
+        complete = needed.get(k, set()) <= set(kept)
+        pending += [(child, kept if complete else None) for child in children.get(k, [])]
     return scales, counts
 
 

@@ -639,3 +639,47 @@ def _write_report(sweep, figures, path) -> Path:
         lines += ["Reproduce this report with", "", f"    dlasweep report {source} -o {path.parent}", ""]
     path.write_text("\n".join(lines))
     return path
+
+
+# Benchmark ----------------------------------------------------------------
+
+def plot_bench(ds, outdir) -> Path:
+    """Draw kernel time against N, log-log, one line per model, to ``bench.png``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        As from ``dlasweep.bench.run_bench``: dimension ``run``, coordinates
+        ``model``, ``method`` (``exact`` or ``naive``) and ``n``, variable
+        ``seconds``, attributes ``cost_exponent_<model>``.
+    outdir : str or Path
+        Created when missing.
+
+    Returns
+    -------
+    Path
+        The PNG written.
+    """
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    model = np.array([str(_plain(v)) for v in ds["model"].values])
+    method = np.array([str(_plain(v)) for v in ds["method"].values])
+    n, seconds = ds["n"].values.astype(float), ds["seconds"].values.astype(float)
+    fig, (ax,) = _figure(1, 6.5, 4.5)
+    for c, name in enumerate(dict.fromkeys(model)):
+        exponent = ds.attrs.get(f"cost_exponent_{name}")
+        for kind, style, label in (
+            ("exact", dict(marker="o", ls="-"), name + (f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else "")),
+            ("naive", dict(marker="x", ls=":", ms=8), f"{name}, naive walk (single steps, kill circle)"),
+        ):
+            pick = (model == name) & (method == kind)
+            if pick.any():
+                order = np.argsort(n[pick])
+                ax.loglog(n[pick][order], seconds[pick][order], color=_colour(c), label=label, **style)
+    ax.set_xlabel("particles N")
+    ax.set_ylabel("wall time to grow (s), one core")
+    ax.set_title("Kernel time against cluster size")
+    ax.legend(fontsize=7)
+    path = out / "bench.png"
+    _save(fig, path)
+    return path

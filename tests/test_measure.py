@@ -54,6 +54,22 @@ def test_box_counts_on_arbitrary_scales_match_reference():
     np.testing.assert_array_equal(counts, [slow_box_count(points, s, False, offsets=3) for s in scales])
 
 
+
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("spread", [(5e6, 0.0), (0.0, 2100.0, 2100.0)], ids=["far apart", "wide 3d"])
+def test_box_counts_of_sets_too_wide_for_dense_marks_match_reference(spread, lattice):
+    # Far apart along the first axis, or across more boxes per slab than the
+    # dense marks hold at s = 1: these grids are counted by sorting instead.
+    rng = np.random.default_rng(4)
+    points = rng.random((60, len(spread))) * 20
+    points = np.r_[points, points + np.array(spread)]
+    if lattice:
+        points = np.round(points)
+    scales = [1.0, 1.5, 2.0, 4.0, 6.0]
+    _, counts = box_counts(points, lattice=lattice, scales=scales)
+    np.testing.assert_array_equal(counts, [slow_box_count(points, s, lattice) for s in scales])
+
+
 @pytest.mark.parametrize(
     "where, lattice_count, offlattice_count",
     [

@@ -121,3 +121,18 @@ def test_draw_cluster_writes_a_picture(tmp_path, suffix):
     path = draw_cluster(c.points, c.params, tmp_path / f"cluster{suffix}")
     head = path.read_bytes()[:200]
     assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head
+
+
+def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
+    from dlasweep.bench import _to_dataset
+    from dlasweep.report import plot_bench
+
+    runs = [("lattice-2d", "exact", n, 1e-6 * n**1.1) for n in (1_000, 10_000, 100_000)]
+    runs += [("offlattice-2d", "exact", n, 2e-6 * n) for n in (1_000, 10_000)]
+    runs += [("lattice-2d", "naive", 1_000, 0.5)]
+    ds = _to_dataset([dict(model=m, method=k, n=n, seconds=t, n_grown=n, steps=10 * n, peak_mb=100.0, added_mb=5.0)
+                      for m, k, n, t in runs])
+    ds.attrs["cost_exponent_lattice-2d"] = 1.1
+    path = plot_bench(ds, tmp_path / "bench")
+    assert path == tmp_path / "bench" / "bench.png"
+    assert path.read_bytes().startswith(b"\x89PNG")
