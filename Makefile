@@ -10,6 +10,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 sweep: $(STAMP)
+	mkdir -p results
 	.venv/bin/dlasweep sweep workflows/quick.toml -o results/quick.nc
 	.venv/bin/dlasweep report results/quick.nc -o results/quick
 
