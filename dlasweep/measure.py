@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import jit
+from ._jit import inline, jit
 
 _HALF = 0.5
 """Half-width of a particle: a lattice site is a unit cell, a disk/sphere has unit diameter."""
@@ -38,11 +38,11 @@ def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
     return 2.0 ** (np.arange(top + 1) / per_octave)
 
 
-_SLOTS = 4
-"""Slabs of marks along the first axis: a box arrives at most 3 boxes behind the furthest one seen (see ``box_counts``)."""
+_BITMAP_CAP = 1 << 31
+"""Most bits (256 MiB) a grid's occupancy bitmap may take; larger grids are counted by sorting their boxes."""
 
-_DENSE_CAP = 1 << 22
-"""Largest slab (boxes across the other axes) or first-axis range handled with dense arrays; beyond, sorting."""
+_EVEN = np.uint64(0x5555555555555555)
+"""The even bits of a word."""
 
 
 @jit
@@ -62,27 +62,22 @@ def _first_axis_order(points, top):
 
 
 @jit
-def _occupied_boxes(points, origin, scale, radius, shape, marks, out):
-    """Count the boxes of side ``scale`` that the particles touch; write them to ``out``.
+def _mark_boxes(points, origin, scale, radius, shape, bitmap, out):
+    """Set the bit of every box of side ``scale`` that a particle touches; return how many were new.
 
-    ``origin`` and ``shape`` are tuples (so the loops over axes unroll).
     ``radius == 0`` puts each particle in the one box holding its centre;
-    ``radius > 0`` in every box its ball overlaps. With ``marks`` of shape
-    ``(_SLOTS, boxes across axes 1..)`` filled with -1, each box is counted
-    and written once; this needs the first-axis boxes to arrive less than
-    ``_SLOTS`` behind the largest so far. With empty ``marks`` every visit is
-    counted. Writing stops when ``out`` is full; the count goes on.
+    ``radius > 0`` in every box its ball overlaps. ``origin`` and ``shape``
+    are tuples (so the loops over axes unroll). ``bitmap`` has a row per box
+    of the leading axes (row-major) and a bit per box of the last axis. With
+    an empty ``bitmap`` every visit is written to ``out`` and counted instead.
     """
     dim = len(origin)
-    dedup = marks.shape[0] > 0
-    # The first-axis box each slab holds marks for; a mark equal to it means
-    # "counted", so a slab is reused for a new box without clearing.
-    owner = np.full(_SLOTS, -1, np.int64)
     home = np.zeros(dim, np.int64)
     step = np.zeros(dim, np.int64)
     gap2 = np.zeros(dim)
     r2 = radius * radius
     corners = 1 << dim if radius > 0.0 else 1
+    dense = bitmap.shape[0] > 0
     count = 0
     for i in range(len(points)):
         for a in range(dim):
@@ -104,26 +99,80 @@ def _occupied_boxes(points, origin, scale, radius, shape, marks, out):
                     d2 += gap2[a]
             if corner > 0 and d2 >= r2:
                 continue
-            write = count < len(out)
-            first = home[0] + (step[0] if corner & 1 else 0)
-            if write:
-                out[count, 0] = first
-            rest = 0
-            for a in range(1, dim):
-                b = home[a] + (step[a] if (corner >> a) & 1 else 0)
-                rest = rest * shape[a] + b
-                if write:
-                    out[count, a] = b
-            new = True
-            if dedup:
-                slot = first % _SLOTS
-                if owner[slot] != first:
-                    if owner[slot] > first:
-                        raise RuntimeError("box_counts: boxes arrived out of order")
-                    owner[slot] = first
-                new = marks[slot, rest] != first
-                marks[slot, rest] = first
-            count += new
+            row = 0
+            for a in range(dim - 1):
+                row = row * shape[a] + home[a] + (step[a] if (corner >> a) & 1 else 0)
+            last = home[dim - 1] + (step[dim - 1] if (corner >> (dim - 1)) & 1 else 0)
+            if dense:
+                word = bitmap[row, last >> 6]
+                bit = np.uint64(1) << np.uint64(last & 63)
+                count += (word & bit) == 0
+                bitmap[row, last >> 6] = word | bit
+            else:
+                for a in range(dim):
+                    out[count, a] = home[a] + (step[a] if (corner >> a) & 1 else 0)
+                count += 1
+    return count
+
+
+@inline
+def _pairs(word):
+    """Halve a word: bit k (k < 32) of the result is set when bit 2k or 2k + 1 of ``word`` is."""
+    x = (word | (word >> np.uint64(1))) & _EVEN
+    x = (x | (x >> np.uint64(1))) & np.uint64(0x3333333333333333)
+    x = (x | (x >> np.uint64(2))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    x = (x | (x >> np.uint64(4))) & np.uint64(0x00FF00FF00FF00FF)
+    x = (x | (x >> np.uint64(8))) & np.uint64(0x0000FFFF0000FFFF)
+    return (x | (x >> np.uint64(16))) & np.uint64(0x00000000FFFFFFFF)
+
+
+@inline
+def _ones(word):
+    """Number of set bits."""
+    x = word - ((word >> np.uint64(1)) & _EVEN)
+    x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return np.int64((x * np.uint64(0x0101010101010101)) >> np.uint64(56))
+
+
+@jit
+def _halve(fine, fine_shape, shift, coarse, shape):
+    """Fill ``coarse``, the bitmap of boxes twice the side of ``fine``'s, and count its boxes.
+
+    Coarse box b covers fine boxes 2b - shift and 2b + 1 - shift on every axis
+    (``shift`` 0 or 1); bitmaps are laid out as in ``_mark_boxes``.
+    """
+    dim = len(shape)
+    merged = np.zeros(2 * coarse.shape[1], np.uint64)
+    index = np.zeros(dim, np.int64)
+    count = 0
+    for row in range(coarse.shape[0]):
+        rest = row
+        for a in range(dim - 2, -1, -1):
+            index[a] = rest % shape[a]
+            rest //= shape[a]
+        # OR of the fine rows under this coarse row, moved one bit up when
+        # shifted so that fine bits 2b - shift, 2b + 1 - shift pair up.
+        merged[:] = 0
+        for corner in range(1 << (dim - 1)):
+            source = 0
+            for a in range(dim - 1):
+                r = 2 * index[a] - shift + ((corner >> a) & 1)
+                if r < 0 or r >= fine_shape[a]:
+                    source = -1
+                    break
+                source = source * fine_shape[a] + r
+            if source >= 0:
+                for w in range(fine.shape[1]):
+                    merged[w] |= fine[source, w]
+        if shift:
+            carry = np.uint64(0)
+            for w in range(len(merged)):
+                merged[w], carry = (merged[w] << np.uint64(1)) | carry, merged[w] >> np.uint64(63)
+        for w in range(coarse.shape[1]):
+            word = _pairs(merged[2 * w]) | (_pairs(merged[2 * w + 1]) << np.uint64(32))
+            coarse[row, w] = word
+            count += _ones(word)
     return count
 
 
@@ -131,36 +180,30 @@ def _grid_shape(high, origin, scale, radius):
     return np.floor((high + radius - origin) / scale).astype(np.int64) + 1
 
 
-def _boxes(points, high, origin, scale, radius, ordered, index, capacity):
-    """Count the distinct boxes of one grid; also return them when there are at most ``capacity``.
+def _empty_bitmap(shape):
+    """A zeroed bitmap for a grid of ``shape``, or None when it would exceed ``_BITMAP_CAP`` bits."""
+    rows, words = int(np.prod(shape[:-1].astype(object))), -(-int(shape[-1]) // 64)
+    return np.zeros((rows, words), np.uint64) if rows * words * 64 <= _BITMAP_CAP else None
 
-    ``high`` bounds ``points`` componentwise. Marks per slab of the first
-    axis (``_occupied_boxes``) need ``ordered`` points and a slab of at most
-    ``_DENSE_CAP`` boxes; otherwise every visit is written and sorted.
-    Returns the count, the boxes as an (m, dim) array of grid indices of
-    dtype ``index`` (or None) and the grid's shape.
-    """
+
+def _from_points(points, high, origin, scale, radius):
+    """Count the boxes of one grid that the particles touch; also return its bitmap (None if too large)."""
     shape = _grid_shape(high, origin, scale, radius)
-    slab = int(np.prod(shape[1:].astype(object)))
+    bitmap = _empty_bitmap(shape)
     args = (points, tuple(origin), float(scale), radius, tuple(shape))
-    if ordered and slab <= _DENSE_CAP:
-        # Pages of ``out`` beyond the count are never touched, so never resident.
-        out = np.empty((capacity, len(shape)), index)
-        count = _occupied_boxes(*args, np.full((_SLOTS, slab), -1, index), out)
-        return count, (out[:count] if count <= capacity else None), shape
-    out = np.empty((len(points) * (2 ** len(shape) if radius > 0.0 else 1), len(shape)), index)
-    boxes = np.unique(out[: _occupied_boxes(*args, np.empty((0, 0), index), out)], axis=0)
-    return len(boxes), (boxes if len(boxes) <= capacity else None), shape
+    if bitmap is not None:
+        return _mark_boxes(*args, bitmap, np.empty((0, 0), np.int64)), bitmap, shape
+    visits = np.empty((len(points) * (2 ** len(shape) if radius > 0.0 else 1), len(shape)), np.int64)
+    return len(np.unique(visits[: _mark_boxes(*args, np.empty((0, 0), np.uint64), visits)], axis=0)), None, shape
 
 
-def _coarsening_parents(scales):
-    """Map each scale that is a whole multiple (>= 2) of smaller ones to the largest of those."""
+def _halvings(scales):
+    """Map each scale that is twice another to that one."""
     parent = {}
     for k, s in enumerate(scales):
-        ratio = np.round(s / scales)
-        fits = np.flatnonzero((ratio >= 2) & np.isclose(scales * ratio, s, rtol=1e-9, atol=0.0))
-        if len(fits):
-            parent[k] = int(fits[np.argmax(scales[fits])])
+        half = np.flatnonzero(np.isclose(2 * scales, s, rtol=1e-9, atol=0.0))
+        if len(half):
+            parent[k] = int(half[0])
     return parent
 
 
@@ -213,44 +256,40 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     if len(scales) == 0 or not (scales >= 1.0).all():
         raise ValueError("scales: expected box sides >= 1 (the particle size)")
     radius = 0.0 if lattice else _HALF
-    index = np.int32 if extent + 2 < 2**31 else np.int64
-    if p.dtype.kind == "i":
-        p = p.astype(index)  # half the memory traffic
-    # In order of the first coordinate's integer part, the first-axis boxes a
-    # particle touches (home box +-1) lie at most 3 behind any touched before.
-    ordered = high[0] <= max(_DENSE_CAP, len(p))
-    if ordered:
+    if p.dtype.kind == "i" and extent < 2**31:
+        p = p.astype(np.int32)  # half the memory traffic
+    # In first-axis order the bits a particle sets lie in rows near the
+    # previous particle's: the bitmaps are read from cache, not memory.
+    if high[0] <= max(len(p), 1 << 22):
         p = _first_axis_order(p, int(high[0]))
-    # Grid j of side r * t is a union of boxes of grid (j * r) % offsets of
-    # side t (whole r), since the two corners are (j * r // offsets) t-boxes
-    # apart: its count follows exactly from those boxes, which are fewer
-    # than the particles, and which keep their first-axis order.
-    parent = _coarsening_parents(scales)
-    ratio = {k: round(scales[k] / scales[m]) for k, m in parent.items()}
+    # Grid j of side 2t is made of boxes of grid (2j) % offsets of side t,
+    # its corner (2j) // offsets t-boxes lower: its count follows from that
+    # grid's bitmap, word by word, instead of from the particles.
+    parent = _halvings(scales)
     needed, children = {}, {}
     for k, m in parent.items():
-        needed.setdefault(m, set()).update(j * ratio[k] % offsets for j in range(offsets))
+        needed.setdefault(m, set()).update(2 * j % offsets for j in range(offsets))
         children.setdefault(m, []).append(k)
-    # Keeping at most this many boxes per grid bounds the memory to a few copies of the points.
-    capacity = len(p) * (2 ** (p.shape[1] - 1) if radius > 0.0 else 1)
     counts = np.empty(len(scales), np.int64)
-    # Depth first, so that only the boxes on the current chain of
-    # coarsenings are held; None means "from the particles".
+    # Depth first, so that only the bitmaps on the current chain of halvings
+    # are held; None means "from the particles".
     pending = [(k, None) for k in range(len(scales)) if k not in parent]
     while pending:
         k, finer = pending.pop()
         kept, best = {}, None
         for j in range(offsets):
             if finer is None:
-                source = (p, high, np.full(p.shape[1], -_HALF - (j / offsets) * scales[k]), scales[k], radius, ordered)
+                origin = np.full(p.shape[1], -_HALF - (j / offsets) * scales[k])
+                count, bitmap, shape = _from_points(p, high, origin, scales[k], radius)
             else:
-                # Centres of the t-boxes in t units, their grid's corner at 0.
-                boxes, top = finer[j * ratio[k] % offsets]
-                source = (boxes, top, np.full(p.shape[1], -_HALF - j * ratio[k] // offsets), float(ratio[k]), 0.0, True)
-            count, boxes, shape = _boxes(*source, index, capacity if j in needed.get(k, ()) else 0)
+                fine, fine_shape = finer[2 * j % offsets]
+                shift = 2 * j // offsets
+                shape = (fine_shape - 1 + shift) // 2 + 1
+                bitmap = _empty_bitmap(shape)
+                count = _halve(fine, tuple(fine_shape), shift, bitmap, tuple(shape))
             best = count if best is None else min(best, count)
-            if boxes is not None:
-                kept[j] = (boxes, shape - 1)
+            if bitmap is not None and j in needed.get(k, ()):
+                kept[j] = (bitmap, shape)
         counts[k] = best
         complete = needed.get(k, set()) <= set(kept)
         pending += [(child, kept if complete else None) for child in children.get(k, [])]

@@ -668,8 +668,9 @@ def plot_bench(ds, outdir) -> Path:
     fig, (ax,) = _figure(1, 6.5, 4.5)
     for c, name in enumerate(dict.fromkeys(model)):
         exponent = ds.attrs.get(f"cost_exponent_{name}")
+        fitted = f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else ""
         for kind, style, label in (
-            ("exact", dict(marker="o", ls="-"), name + (f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else "")),
+            ("exact", dict(marker="o", ls="-"), name + fitted),
             ("naive", dict(marker="x", ls=":", ms=8), f"{name}, naive walk (single steps, kill circle)"),
         ):
             pick = (model == name) & (method == kind)
