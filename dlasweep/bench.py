@@ -165,8 +165,9 @@ def analysis_bench(echo=print) -> dict:
     16 000, against about 20 000 for one 1e7 cluster) and its box occupancy
     are close to a 1e7 cluster's, and they set the cost of box counting; the
     radius of gyration of every prefix costs the same for any 1e7 points
-    (the D fitted to the copies means nothing). The report is of ``REPORT_SPEC``, grown by ``run_sweep``
-    on an embedded cluster before the clock starts. Compilation is excluded.
+    (the D fitted to the copies means nothing). The report is of
+    ``REPORT_SPEC``, grown by ``run_sweep`` on an embedded cluster before the
+    clock starts. Compilation is excluded.
 
     Parameters
     ----------
