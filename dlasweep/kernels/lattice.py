@@ -374,7 +374,7 @@ def grow_lattice(n, p, marks, rng):
     times : float64 seconds at each of ``marks`` (NaN when not reached)
     """
     dim = p["dim"]
-    points = np.zeros((n, 3), np.int64)
+    points = np.zeros((n, dim), np.int64)
     steps = np.zeros(n, np.int64)
     times = np.full(len(marks), np.nan)
     count, status = _grow(
@@ -383,4 +383,6 @@ def grow_lattice(n, p, marks, rng):
         p["launch_factor"], p["launch_margin"], p["kill_factor"], p["jumps"], p["walkers"],
         p["max_steps"], marks, rng, points, steps, times,
     )
-    return np.ascontiguousarray(points[:count, :dim]), steps[:count].copy(), int(status), times
+    if count < n:  # don't keep the unused tail alive
+        points, steps = points[:count].copy(), steps[:count].copy()
+    return points, steps, int(status), times
