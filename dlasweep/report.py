@@ -560,7 +560,8 @@ def _failure(sweep, path):
         xlabel = "box side / cluster radius" if axis == "size" else axis
         for ax in (top, bottom):
             ax.set_xlabel(xlabel)
-            if axis in ("kill_factor", "size", "step") and (np.asarray(sweep.ds[axis].values, float) > 0).sum() > 1:
+            # kill_factor and step keep a linear axis: their exact value is 0
+            if axis == "size" and (np.asarray(sweep.ds[axis].values, float) > 0).sum() > 1:
                 _log_x(ax)
         top.axhline(REFERENCE_D.get(sweep.dim, np.nan), color="k", ls="--", lw=1)
         top.set_ylabel("D (mean ± stderr)")
