@@ -732,28 +732,12 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                     if t <= best:
                         best = t
                         hit = -2
-                w[0] += best * u0
-                w[1] += best * u1
-                w[2] += best * u2
+                u[0], u[1], u[2] = u0, u1, u2
                 if hit == -1:
+                    for a in range(3):
+                        w[a] += best * u[a]
                     continue
-                if hit == -2:
-                    w[up] = 0.0
-                    normal[0] = 0.0
-                    normal[1] = 0.0
-                    normal[2] = 0.0
-                    normal[up] = 1.0
-                else:
-                    d0 = w[0] - lx[hit]
-                    d1 = w[1] - ly[hit]
-                    d2 = w[2] - lz[hit]
-                    r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                    normal[0] = d0 / r
-                    normal[1] = d1 / r
-                    normal[2] = d2 / r
-                    w[0] = lx[hit] + normal[0]
-                    w[1] = ly[hit] + normal[1]
-                    w[2] = lz[hit] + normal[2]
+                _settle(w, u, best, hit, dim, lx, ly, lz, normal)  # once per contact: a call is cheap here
                 contact = True
             elif sigma == 0.0:
                 # single unit steps everywhere (jumps=false)
