@@ -5,10 +5,13 @@ plain occupancy bit per cell; segment ``s >= 1`` is a *dilated* map of cells
 of side ``2**s``: a cell is set when a particle lies in it or in one of its
 ``3**dim - 1`` neighbours. A walker whose level-``s`` cell is clear is more
 than ``2**s`` (Chebyshev, so also Euclidean) from every particle, and because
-the dilated sets are nested, the largest clear level is found by bisection.
+the dilated sets are nested, the largest clear level is found by a local
+search from the walker's previous level (``free_bound``).
 
 Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, so a 2D grid costs
 about 1.3 bits per cell in all, and memory follows the cluster, not a canvas.
+Near the cluster a coarse Chebyshev distance field (``field_*``, one byte per
+4x4 cells) gives a sharper bound than the power-of-two maps.
 """
 
 import numpy as np
@@ -78,28 +81,6 @@ def mark(words, dim, start, blocks, cells, i, j, k):
                     c = ck + dk
                     if 0 <= c < w:
                         _set(words, dim, start, blocks, s, a, b, c)
-
-
-@jit
-def clear_level(words, dim, start, blocks, cells, i, j, k):
-    """Largest level whose cell around (i, j, k) is clear, or 0 if none is.
-
-    A result ``s > 0`` guarantees every particle is more than ``2**s`` away.
-    """
-    nseg = len(cells)
-    if test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1):
-        return 0
-    top = nseg - 1
-    if not test(words, dim, start, blocks, top, i >> top, j >> top, k >> top):
-        return top
-    lo, hi = 1, top  # clear at lo, set at hi
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if test(words, dim, start, blocks, mid, i >> mid, j >> mid, k >> mid):
-            hi = mid
-        else:
-            lo = mid
-    return lo
 
 
 @jit
