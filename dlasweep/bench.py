@@ -45,7 +45,12 @@ print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.step
 """
 
 
-def _probe(params: dict, n: int) -> dict:
+def probe(params: dict, n: int) -> dict:
+    """Grow one cluster of ``n`` with ``params`` in a fresh interpreter.
+
+    Returns its seconds (compile excluded), status, steps and peak memory;
+    e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures.
+    """
     out = subprocess.run(
         [sys.executable, "-c", _PROBE, json.dumps(params), str(n)],
         capture_output=True, text=True, check=True,
@@ -76,7 +81,7 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
         plan.append(("lattice-2d", "naive", {**MODELS["lattice-2d"], **NAIVE}, n))
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'peak MB':>9}{'added MB':>10}")
     for name, method, params, n in plan:
-        r = _probe(params, n)
+        r = probe(params, n)
         r.update(model=name, method=method, n=n)
         rows.append(r)
         echo(
