@@ -83,7 +83,7 @@ def _parser() -> argparse.ArgumentParser:
     where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
-    many.add_argument("--workers", type=int, metavar="K", help="processes of the embedded dask cluster")
+    many.add_argument("--workers", type=int, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
     many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
     many.set_defaults(handler=_sweep)
 

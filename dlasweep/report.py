@@ -16,7 +16,6 @@ import numpy as np
 
 from .fit import ensemble, fit_dimension, fit_mass_radius
 from .measure import radius_of_gyration
-from .store import cluster_points
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
 """D of DLA: 2D off-lattice 1.7100(3); 3D about 2.50."""
@@ -126,7 +125,7 @@ class _Sweep:
             self.cluster_of[config, seed] = i
             if ds["cluster_particles"].values[i] < 1:
                 continue
-            points = cluster_points(ds, i)
+            points = _cluster_points(ds, i)
             rg = radius_of_gyration(points)
             for k in range(len(self.counts)):
                 index = (*config, k, seed)
@@ -163,6 +162,12 @@ class _Sweep:
             row["seconds_per_particle"] = float(np.nanmean(self.ds["wall_time"].values[at][alive] / grown[alive])) if alive.any() else np.nan
             row["steps_per_particle"] = float(np.mean(self.ds["walk_steps"].values[at][alive] / grown[alive])) if alive.any() else np.nan
         return row
+
+
+def _cluster_points(ds, i):
+    from .store import cluster_points  # here, so `import dlasweep` skips xarray until a sweep is read
+
+    return cluster_points(ds, i)
 
 
 def _key(value):
@@ -305,7 +310,7 @@ def _gallery(sweep, path):
         return None
     fig, axes = _figure(len(shown), 3.4, 3.4)
     for ax, config in zip(axes, shown):
-        points = cluster_points(sweep.ds, sweep.cluster_of[config, 0])
+        points = _cluster_points(sweep.ds, sweep.cluster_of[config, 0])
         status = sweep.status_names[sweep.status[(*config, len(sweep.counts) - 1, 0)]]
         ax.set_title(f"{sweep.label(config)}\nN={len(points)}, {status}", fontsize=8)
         if len(points):

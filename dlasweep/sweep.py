@@ -17,6 +17,7 @@ only module that knows dask.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import itertools
 import json
 import logging
@@ -55,15 +56,15 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         A spec from ``load_spec``, or the path of one.
     client : distributed.Client or str, optional
         A connected client, or a scheduler address. Default: an embedded
-        ``LocalCluster`` with one single-threaded process per core.
+        ``LocalCluster``: one in-process worker with a thread per core.
     out : path, optional
         The netCDF file to write; its ``.parts`` folder keeps finished tasks
         until the file is complete. Without it, results stay in memory.
     resume : bool
         Reuse the parts of an interrupted run of the same spec.
     workers : int, optional
-        Processes of the embedded cluster (default: ``[run] workers``, else
-        the usable cores).
+        Threads of the embedded cluster, i.e. tasks run at once (default:
+        ``[run] workers``, else the usable cores).
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
     scheduler_file : path, optional
@@ -89,7 +90,6 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         todo = [t for t in spec.tasks() if not parts.finished(t.key)]
         if todo:
             with _connected(client, scheduler_file, workers or spec.workers, len(todo)) as dask_client:
-                _warm_up(dask_client, todo)
                 bar = tqdm(total=spec.n_tasks, initial=spec.n_tasks - len(todo), unit="cluster",
                            desc=spec.name, disable=not progress, file=sys.stderr)
                 with bar:
@@ -243,9 +243,11 @@ def _connected(client, scheduler_file, workers, n_tasks):
         with Client(**kwargs) as connected:
             yield connected
         return
-    n_workers = min(workers or _usable_cores(), n_tasks)
-    # Workers log heartbeat errors while the cluster shuts down; task failures are reported anyway.
-    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+    threads = min(workers or _usable_cores(), n_tasks)
+    # The kernels release the GIL, so one in-process worker with a thread per
+    # core runs them in parallel, starts in milliseconds instead of a second
+    # per spawned process, and loads the compiled kernels once, not per process.
+    with LocalCluster(n_workers=1, threads_per_worker=threads, processes=False,
                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
         with Client(cluster) as embedded:
             yield embedded
@@ -256,21 +258,6 @@ def _usable_cores() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:
         return os.cpu_count() or 1
-
-
-def _warm_up(client, tasks):
-    """Compile (or load from numba's cache) each kernel once per worker, before timing starts."""
-    examples = {}
-    for task in tasks:
-        examples.setdefault((task.params["model"], task.params["dim"]), task.params)
-    client.run(_grow_examples, list(examples.values()))
-
-
-def _grow_examples(examples):
-    for params in examples:
-        # A failing example fails its real tasks too, which record the error.
-        with contextlib.suppress(Exception):
-            grow(2, 0, **params)
 
 
 def _compute(client, spec, todo, parts, bar):
@@ -291,6 +278,10 @@ def _compute(client, spec, todo, parts, bar):
 
     running = as_completed([submit(t) for t in itertools.islice(pending, window)],
                            with_results=True, raise_errors=False)
+    # xarray imports dask.array (half a second) when it builds the dataset;
+    # the idle client thread does it now, while the workers grow clusters
+    with contextlib.suppress(ImportError):
+        importlib.import_module("dask.array")
     for future, result in running:
         task = task_of.pop(future.key)
         if future.status != "finished":
