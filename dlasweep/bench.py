@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -148,7 +149,39 @@ dim = 2
 [run]
 root_seed = 1
 """
-"""The sweep whose report ``analysis_bench`` times: 64 lattice clusters of 1e4 particles."""
+"""The sweep ``analysis_bench`` times, then reports: 64 lattice clusters of 1e4 particles."""
+SWEEP_THREADS = 2
+
+_SWEEP_PROBE = """
+import json, sys, time
+start = time.perf_counter()
+import dlasweep as dla
+from dlasweep.spec import parse_spec
+spec = parse_spec(sys.argv[1])
+t = time.perf_counter(); ds = dla.run_sweep(spec, out=sys.argv[2], workers=int(sys.argv[3]), progress=False)
+end = time.perf_counter()
+kernels = ds.wall_time.sel(n_particles=ds.n_particles.max())
+print(json.dumps(dict(sweep=end - t, script=end - start, kernels=float(kernels.sum()))))
+"""
+
+
+def sweep_efficiency(out, threads: int = SWEEP_THREADS) -> dict:
+    """Run ``REPORT_SPEC`` as a user would, in a fresh interpreter, into ``out``.
+
+    Returns the seconds inside ``run_sweep`` (embedded cluster start, every
+    task, writing the netCDF), of the whole process (interpreter and imports
+    too), and the kernels' own seconds summed over tasks; the ideal is the
+    kernels' sum divided by ``threads``.
+    """
+    import time
+
+    start = time.perf_counter()
+    run = subprocess.run([sys.executable, "-c", _SWEEP_PROBE, REPORT_SPEC, str(out), str(threads)],
+                         capture_output=True, text=True, check=True)
+    result = json.loads(run.stdout.strip().splitlines()[-1])
+    result["process"] = time.perf_counter() - start
+    result["ideal"] = result["kernels"] / threads
+    return result
 
 
 def _tiled_cluster(model: str, n: int = 100_000, tiles: int = 10) -> np.ndarray:
@@ -170,9 +203,9 @@ def analysis_bench(echo=print) -> dict:
     16 000, against about 20 000 for one 1e7 cluster) and its box occupancy
     are close to a 1e7 cluster's, and they set the cost of box counting; the
     radius of gyration of every prefix costs the same for any 1e7 points
-    (the D fitted to the copies means nothing). The report is of
-    ``REPORT_SPEC``, grown by ``run_sweep`` on an embedded cluster before the
-    clock starts. Compilation is excluded.
+    (the D fitted to the copies means nothing). ``REPORT_SPEC`` is swept by
+    ``sweep_efficiency`` (parallel efficiency, start-up included), then
+    reported. Compilation is excluded from the measurement timings.
 
     Parameters
     ----------
@@ -184,7 +217,8 @@ def analysis_bench(echo=print) -> dict:
     dict
         Wall seconds: ``box_<model>`` (``box_counts`` + ``fit_dimension``),
         ``rg_<model>`` (``radius_of_gyration`` + ``fit_mass_radius``) for
-        ``lattice`` and ``offlattice``, and ``report``.
+        ``lattice`` and ``offlattice``, ``sweep_*`` from ``sweep_efficiency``,
+        and ``report``.
     """
     import tempfile
     import time
@@ -192,8 +226,7 @@ def analysis_bench(echo=print) -> dict:
     from .fit import fit_dimension, fit_mass_radius
     from .measure import box_counts, radius_of_gyration
     from .report import report
-    from .spec import parse_spec
-    from .sweep import run_sweep
+    from .store import open_sweep
 
     seconds = {}
     for model in ("lattice", "offlattice"):
@@ -209,11 +242,18 @@ def analysis_bench(echo=print) -> dict:
         seconds[f"rg_{model}"] = time.perf_counter() - start
         echo(f"{model} 2D, {len(points)} points: box counting + fit {seconds[f'box_{model}']:.2f} s (D={fit.D:.3f}), "
              f"Rg of every prefix + fit {seconds[f'rg_{model}']:.2f} s")
-    ds = run_sweep(parse_spec(REPORT_SPEC), client=None, progress=False)
     with tempfile.TemporaryDirectory() as scratch:
+        eff = sweep_efficiency(Path(scratch) / "sweep.nc")
+        seconds.update({f"sweep_{k}": v for k, v in eff.items()})
+        echo(f"sweep of 64 clusters of 1e4 on {SWEEP_THREADS} threads: {eff['sweep']:.2f} s in run_sweep "
+             f"({eff['process']:.2f} s for the whole process); kernels {eff['kernels']:.2f} s in all, "
+             f"ideal {eff['ideal']:.2f} s; ratio {eff['sweep'] / eff['ideal']:.2f} "
+             f"({eff['process'] / eff['ideal']:.2f} with the process)")
+        ds = open_sweep(Path(scratch) / "sweep.nc")
         start = time.perf_counter()
-        report(ds, scratch)
+        report(ds, Path(scratch) / "report")
         seconds["report"] = time.perf_counter() - start
+        ds.close()
     echo(f"report of a {ds.sizes['cluster']}-cluster sweep (N up to {int(ds['n_particles'].max())}): "
          f"{seconds['report']:.1f} s")
     return seconds
