@@ -18,7 +18,7 @@ class Cluster:
     Attributes
     ----------
     points : ndarray, (n_grown, dim)
-        Positions in attachment order (int64 on a lattice, float64 off it),
+        Positions in attachment order (int32 on a lattice, float64 off it),
         the seed particle(s) first.
     steps : ndarray, (n_grown,)
         Diffusion time of each particle: walk steps (or exact jumps) taken by

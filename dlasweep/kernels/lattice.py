@@ -1,13 +1,19 @@
 """Square and simple-cubic lattice DLA.
 
-A walker far from the cluster moves by walk-on-circles/spheres jumps whose
-radius is a lower bound on its free distance (hierarchical maps and the
-cluster's bounding circle); within a few sites of the cluster it takes single
-lattice steps, so every contact is a lattice contact. Outside the launch
-circle it returns exactly (Poisson kernel) instead of wandering off. The
-far-field jump treats the lattice walk as Brownian motion at scales of four
-sites and more, the usual approximation of fast lattice DLA codes.
+Near the cluster the walk is an exact lattice random walk. A walker whose
+nearest particle is at Chebyshev distance ``d >= 3`` jumps, in one draw, to
+where the lattice walk first leaves the square (cube) of half-width ``d - 1``
+around it (``exit_tables``): no site inside touches the cluster, so this is
+exact, and every contact is still a lattice contact. Within two sites it takes
+single steps. ``d`` comes from the bit-packed occupancy words near the walker,
+a coarse Chebyshev distance field and the hierarchical maps (``maps``).
+Far from the cluster (beyond the distances the tables cover) the walker moves
+by walk-on-circles/spheres jumps, which treat the lattice walk as Brownian at
+scales of ``CIRCLE_MIN`` sites and more; outside the launch circle it returns
+exactly (Poisson kernel) instead of wandering off.
 """
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -17,8 +23,12 @@ from .walk import below, direction, return_to_plane, return_to_sphere
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
-JUMP_MARGIN = 2.0  # sites kept between a jump's circle and the nearest particle
+JUMP_MARGIN = 2.0  # sites kept between a circle jump and the nearest particle
+CIRCLE_MIN = 16.0  # smallest circle jump: below it the exact square jumps do the work
 FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, in cells of 4 sites
+TABLE_MAX = (0, 0, 64, 24)  # by dimension: largest square (cube) half-width with an exit table
+FINE_CAP = (0, 0, 9, 5)  # by dimension: the occupancy words give exact distances below this
+GROWTH = 1.25  # the grid's side grows by this factor when the cluster outgrows it
 
 
 def _moves(dim, moore):
@@ -29,6 +39,154 @@ def _moves(dim, moore):
     out = np.zeros((int(keep.sum()), 3), np.int64)
     out[:, :dim] = grid[keep]
     return out
+
+
+def exit_law(dim, moore, r):
+    """Where the lattice walk from the centre first leaves the square (cube) of half-width r.
+
+    The Green's function of the walk killed on the boundary is diagonal in the
+    sine basis (the walk's generator is a sum, NN, or a product, Moore, of 1D
+    shift operators), so it is exact up to rounding for every r; the exit
+    probability of a boundary site is the Green's function summed over the
+    interior sites one move away, over the number of moves.
+
+    Returns
+    -------
+    offsets : int (K, dim), the boundary sites reachable in one move
+    probs : float (K,), their exit probabilities (summing to 1)
+    """
+    n = 2 * r - 1
+    m = np.arange(1, n + 1)
+    theta = np.pi * m / (n + 1)
+    basis = np.sqrt(2.0 / (n + 1)) * np.sin(np.outer(m, theta))  # [site, mode]
+    cos = np.meshgrid(*([np.cos(theta)] * dim), indexing="ij")
+    if moore:
+        eig = (np.prod([1.0 + 2.0 * c for c in cos], axis=0) - 1.0) / (3**dim - 1)
+    else:
+        eig = sum(cos) / dim
+    green = 1.0 / (1.0 - eig)
+    for a in range(dim):  # times the centre's coordinates in the basis
+        green = green * basis[r - 1].reshape([-1 if b == a else 1 for b in range(dim)])
+    for a in range(dim):  # back to sites
+        green = np.moveaxis(np.tensordot(basis, green, axes=([1], [a])), 0, a)
+    padded = np.zeros((2 * r + 1,) * dim)
+    padded[(slice(1, -1),) * dim] = green  # the boundary holds zero
+    hits = np.zeros_like(padded)
+    for v in _moves(dim, moore)[:, :dim]:
+        hits += np.roll(padded, tuple(v), axis=tuple(range(dim)))
+    sites = np.indices(padded.shape).reshape(dim, -1).T - r
+    probs = hits.reshape(-1) / len(_moves(dim, moore))
+    keep = (np.abs(sites).max(1) == r) & (probs > 0.0)  # NN: corners are never hit first
+    return sites[keep], probs[keep]
+
+
+@jit
+def _alias(probs):
+    """Walker's alias table (Vose) for O(1) sampling from ``probs``."""
+    k = len(probs)
+    scaled = probs * (k / probs.sum())
+    cut = np.ones(k)
+    alias = np.arange(k).astype(np.int32)
+    small = np.zeros(k, np.int64)
+    large = np.zeros(k, np.int64)
+    ns = nl = 0
+    for a in range(k):
+        if scaled[a] < 1.0:
+            small[ns] = a
+            ns += 1
+        else:
+            large[nl] = a
+            nl += 1
+    while ns > 0 and nl > 0:
+        ns -= 1
+        s = small[ns]
+        g = large[nl - 1]
+        cut[s] = scaled[s]
+        alias[s] = g
+        scaled[g] -= 1.0 - scaled[s]
+        if scaled[g] < 1.0:
+            nl -= 1
+            small[ns] = g
+            ns += 1
+    return cut, alias
+
+
+@lru_cache(maxsize=None)
+def exit_tables(dim, moore):
+    """Alias tables of ``exit_law`` for half-widths 0..TABLE_MAX[dim] (0 and 1 empty).
+
+    Returns
+    -------
+    start : int64 (R + 2,), entries of half-width r are start[r]:start[r + 1]
+    cut, alias : float64, int32 (K,), the alias table (alias indices are local to r)
+    offsets : int8 (K, 3)
+    """
+    top = TABLE_MAX[dim]
+    start = np.zeros(top + 2, np.int64)
+    cuts, aliases, offsets = [], [], []
+    for r in range(2, top + 1):
+        sites, probs = exit_law(dim, moore, r)
+        cut, alias = _alias(probs)
+        cuts.append(cut)
+        aliases.append(alias)
+        off = np.zeros((len(probs), 3), np.int8)
+        off[:, :dim] = sites
+        offsets.append(off)
+        start[r + 1:] = start[r] + len(probs)
+    return start, np.concatenate(cuts), np.concatenate(aliases), np.concatenate(offsets)
+
+
+@jit
+def _seed_state(rng):
+    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded).
+
+    The hot loop draws from this small generator kept in an array: numpy's
+    Generator costs several times more per draw from numba.
+    """
+    rs = np.zeros(4, np.uint64)
+    z = np.uint64(rng.integers(1, 2**62))
+    for a in range(4):
+        z += np.uint64(0x9E3779B97F4A7C15)
+        x = z
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        rs[a] = x ^ (x >> np.uint64(31))
+    return rs
+
+
+@jit
+def _uniform(rs):
+    """xoshiro256+: a double in [0, 1) from state ``rs``."""
+    s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+    out = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    t = s1 << np.uint64(17)
+    s2 ^= s0
+    s3 ^= s1
+    s1 ^= s2
+    s0 ^= s3
+    s2 ^= t
+    rs[0], rs[1], rs[2] = s0, s1, s2
+    rs[3] = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
+    return out
+
+
+@jit
+def _circle(rs, dim, out):
+    """A uniform unit vector into ``out`` (rejection, no trigonometry)."""
+    while True:
+        u = 2.0 * _uniform(rs) - 1.0
+        v = 2.0 * _uniform(rs) - 1.0
+        s = u * u + v * v
+        if 0.0 < s < 1.0:
+            break
+    if dim == 2:
+        out[0] = (u * u - v * v) / s
+        out[1] = 2.0 * u * v / s
+        return
+    f = 2.0 * np.sqrt(1.0 - s)
+    out[0] = u * f
+    out[1] = v * f
+    out[2] = 1.0 - 2.0 * s
 
 
 @jit
@@ -73,13 +231,21 @@ def _occupied(words, dim, start, blocks, width, off, q0, q1, q2):
 
 
 @jit
+def _filled(words, dim, nb, width, off, q0, q1, q2):
+    """``_occupied`` with the layout as scalars, for the hot loop."""
+    i, j, k = q0 + off, q1 + off, q2 + off
+    if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
+        return False
+    return maps.bit(words, dim, 0, nb, i, j, k)
+
+
+@jit
 def _in_contact(words, dim, start, blocks, width, off, q, moves, period):
     """Whether site q touches a particle (or the substrate) under ``moves``."""
-    up = dim - 1
     for m in range(moves.shape[0]):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
         if period > 0:
-            if (n0, n1, n2)[up] < 0:
+            if (n2 if dim == 3 else n1) < 0:
                 return True
             n0 = n0 % period
             if dim == 3:
@@ -101,17 +267,41 @@ def _outside(q, dim, line, lo, hi):
 
 
 @jit
+def _near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+    """One site of the exact lattice walk: stick, or step to a random neighbour.
+
+    The walker first sticks with probability ``stickiness`` if it touches the
+    cluster, else it steps (staying put when the neighbour is occupied).
+    ``near`` False promises that no particle is within two sites, which
+    spares the contact and occupancy tests. Returns whether it stuck.
+    """
+    up = dim - 1
+    line = period > 0
+    if near or (line and q[up] <= 1):
+        if _in_contact(words, dim, start, blocks, width, off, q, moves, period):
+            if stickiness >= 1.0 or _uniform(rs) < stickiness:
+                return True
+    m = np.int64(_uniform(rs) * moves.shape[0])
+    n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+    if line:
+        n0 = n0 % period
+        if dim == 3:
+            n1 = n1 % period
+    blocked = near and _occupied(words, dim, start, blocks, width, off, n0, n1, n2)
+    if not blocked and not (line and (n2 if dim == 3 else n1) < 0):
+        q[0], q[1], q[2] = n0, n1, n2
+    return False
+
+
+@jit
 def _near_walk(
-    words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
-    jumps, boxed, lo, hi, radius, budget,
+    words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+    boxed, lo, hi, radius, budget,
 ):
     """Single lattice steps from site q until the walker sticks or may leave.
 
-    At each site the walker first sticks with probability ``stickiness`` if it
-    touches the cluster, else it steps to a random neighbour (staying put when
-    that is occupied). It stops, without sticking, after ``budget`` steps (0:
-    no limit), on leaving the box, beyond ``radius`` (0: none) or, when
-    ``jumps``, where a jump becomes possible again (level-2 map clear).
+    It stops, without sticking, after ``budget`` steps (0: no limit), on
+    leaving the box or beyond ``radius`` (0: none).
 
     Returns
     -------
@@ -121,26 +311,14 @@ def _near_walk(
     up = dim - 1
     line = period > 0
     taken = 0
-    nm = moves.shape[0]
     while True:
         i, j, k = q[0] + off, q[1] + off, q[2] + off
         ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
         # the level-1 map is clear unless a particle is within two sites
         near = ingrid and maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1)
-        if near or (line and q[up] <= 1):
-            if _in_contact(words, dim, start, blocks, width, off, q, moves, period):
-                if stickiness >= 1.0 or rng.random() < stickiness:
-                    return True, taken
-        m = below(rng, nm)
-        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
-        if line:
-            n0 = n0 % period
-            if dim == 3:
-                n1 = n1 % period
+        if _near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+            return True, taken
         taken += 1
-        blocked = near and _occupied(words, dim, start, blocks, width, off, n0, n1, n2)
-        if not blocked and not (line and (n0, n1, n2)[up] < 0):
-            q[0], q[1], q[2] = n0, n1, n2
         if taken == budget:
             return False, taken
         if boxed and _outside(q, dim, line, lo, hi):
@@ -149,18 +327,93 @@ def _near_walk(
             r2 = float(q[up] * q[up]) if line else float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])
             if r2 > radius * radius:
                 return False, taken
-        if jumps:
-            i, j, k = q[0] + off, q[1] + off, q[2] + off
-            if not (0 <= i < width and 0 <= j < width and 0 <= k < width):
-                return False, taken
-            if not maps.test(words, dim, start, blocks, 2, i >> 2, j >> 2, k >> 2):
-                return False, taken
+
+
+@jit
+def _row2(w0, w1, w2, t):
+    """Row t (0..7) of three 8x8 words side by side: 24 sites as bits."""
+    shift = np.uint64(8 * t)
+    return (
+        ((w0 >> shift) & np.uint64(255))
+        | (((w1 >> shift) & np.uint64(255)) << np.uint64(8))
+        | (((w2 >> shift) & np.uint64(255)) << np.uint64(16))
+    )
+
+
+@jit
+def _word(words, nb, x, y, z):
+    """Word (x, y, z) of the occupancy segment, empty outside the grid."""
+    inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
+    return words[x + nb * (y + nb * z)] if inside else np.uint64(0)
+
+
+@jit
+def _fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
+    """Chebyshev distance from site (x, y) of word b1 to the nearest particle, capped at 9.
+
+    ``a*``, ``b*``, ``c*`` are the 3x3 words (8x8 sites each, rows a below)
+    around the walker's, which cover 8 sites on every side, so the result is
+    exact below the cap. Rows of 24 sites are OR-ed outwards from the
+    walker's row; the square of half-width r is hit when the OR of its rows
+    has a bit within r columns. Scalars only: a call that passes arrays costs
+    atomic reference counting when numba does not inline it.
+    """
+    x += 8
+    seen = _row2(b0, b1, b2, y)
+    found = 9
+    for r in range(9):
+        if r > 0:
+            lo, hi = y - r, y + r
+            seen |= _row2(a0, a1, a2, lo + 8) if lo < 0 else _row2(b0, b1, b2, lo)
+            seen |= _row2(c0, c1, c2, hi - 8) if hi > 7 else _row2(b0, b1, b2, hi)
+        if (seen >> np.uint64(x - r)) & ((np.uint64(1) << np.uint64(2 * r + 1)) - np.uint64(1)) != 0:
+            found = r
+            break
+    return found
+
+
+@jit
+def _fine3(words, nb, i, j, k, cube):
+    """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5.
+
+    As ``_fine2`` with the 3x3x3 words (4x4x4 sites each) around the walker's,
+    copied into ``cube`` once: rows of 12 sites along x, OR-ed over the
+    (y, z) squares of growing size.
+    """
+    bx, by, bz = i >> 2, j >> 2, k >> 2
+    for c in range(3):
+        for b in range(3):
+            for a in range(3):
+                cube[a + 3 * (b + 3 * c)] = _word(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+    x = (i & 3) + 4
+    y = (j & 3) + 4
+    z = (k & 3) + 4
+    seen = np.uint64(0)
+    found = 5
+    for r in range(5):
+        for zz in range(z - r, z + r + 1):
+            edge = zz == z - r or zz == z + r
+            for yy in range(y - r, y + r + 1):
+                if not edge and yy != y - r and yy != y + r:
+                    continue
+                w = 3 * ((yy >> 2) + 3 * (zz >> 2))
+                shift = np.uint64(4 * (yy & 3) + 16 * (zz & 3))
+                seen |= (
+                    ((cube[w] >> shift) & np.uint64(15))
+                    | (((cube[w + 1] >> shift) & np.uint64(15)) << np.uint64(4))
+                    | (((cube[w + 2] >> shift) & np.uint64(15)) << np.uint64(8))
+                )
+        if (seen >> np.uint64(x - r)) & ((np.uint64(1) << np.uint64(2 * r + 1)) - np.uint64(1)) != 0:
+            found = r
+            break
+    return found
 
 
 @jit
 def _grow(
     n, dim, moves, stickiness, seed_shape, size, launch_box, launch_factor, launch_margin,
     kill_factor, jumps, walkers, max_steps, marks, rng, points, steps, times,
+    t_start, t_cut, t_alias, t_off,
 ):
     t0 = clock()
     up = dim - 1
@@ -169,6 +422,10 @@ def _grow(
     boxed = size > 0 and not line
     lo = -(size // 2)
     hi = size - 1 + lo
+    rs = _seed_state(rng)
+    top = TABLE_MAX[dim]
+    rounding = 0.5 * np.sqrt(dim)
+    field_far = ((FIELD_CAP[dim] - 1) << maps.FIELD_SHIFT) + 1  # the field's largest bound  # how far a site can be from the point it rounds
 
     width = 64 if not line else 4 * size
     off = width // 2 if not line else size
@@ -185,6 +442,9 @@ def _grow(
     for p in range(count):
         r_max = max(r_max, np.sqrt(np.sum(points[p].astype(np.float64) ** 2)))
     words, start, blocks, cells, field = _rebuild(points, count, dim, width, off, period)
+    nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+    nm = moves.shape[0]
+    cube = np.zeros(27, np.uint64)
 
     mi = 0
     while mi < len(marks) and marks[mi] <= count:
@@ -244,8 +504,8 @@ def _grow(
                 live -= 1
                 continue
             stuck, taken = _near_walk(
-                words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
-                False, True, box_lo, box_hi, 0.0, 1,
+                words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+                True, box_lo, box_hi, 0.0, 1,
             )
             for a in range(3):
                 wpos[w, a] = q[a]
@@ -271,65 +531,145 @@ def _grow(
                     direction(rng, dim, scratch)
                     for a in range(dim):
                         pos[a] = launch_r * scratch[a]
-            r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
             kill_r = kill_factor * launch_r
             # any radius beyond the launch circle is exact for the return; a
             # unit gap spares a walker that rounding put a hair outside it
             return_r = launch_r + 1.0 if kill_factor == 0.0 and not boxed and not launch_box else 0.0
-            if kill_factor > 0.0 and r > kill_r:
-                need_launch = True
-                continue
-            if return_r > 0.0 and r > return_r:
+            budget = max_steps - total if max_steps > 0 else np.int64(-1)
+            # one walker's moves until it sticks, leaves, or spends the budget
+            while budget != 0:
+                r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
+                if kill_factor > 0.0 and r > kill_r:
+                    need_launch = True
+                    break
+                if return_r > 0.0 and r > return_r:
+                    total += 1
+                    pending += 1
+                    budget -= 1
+                    if line:
+                        return_to_plane(rng, dim, pos, launch_r, size)
+                    elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
+                        need_launch = True
+                        break
+                    continue
+                for a in range(3):
+                    q[a] = _site(pos[a])
+                if (boxed or launch_box) and _outside(q, dim, line, box_lo, box_hi):
+                    need_launch = True
+                    break
+                if not jumps:
+                    stuck, taken = _near_walk(
+                        words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+                        boxed or launch_box, box_lo, box_hi, kill_r if kill_factor > 0.0 else return_r,
+                        max(budget, 0),
+                    )
+                    total += taken
+                    pending += taken
+                    for a in range(3):
+                        pos[a] = q[a]
+                    break
+                i, j, k = q[0] + off, q[1] + off, q[2] + off
+                ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
+                # the level-1 map is clear unless a particle is within three sites
+                near = ingrid and maps.bit(words, dim, base1, nb1, i >> 1, j >> 1, k >> 1)
+                if near or (line and q[up] <= 1):
+                    # a single lattice step, written out: calls that pass
+                    # arrays would cost atomic reference counting
+                    touch = False
+                    for m in range(nm):
+                        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+                        if line:
+                            if (n2 if dim == 3 else n1) < 0:
+                                touch = True
+                                break
+                            n0 = n0 % period
+                            if dim == 3:
+                                n1 = n1 % period
+                        if _filled(words, dim, nb0, width, off, n0, n1, n2):
+                            touch = True
+                            break
+                    if touch and (stickiness >= 1.0 or _uniform(rs) < stickiness):
+                        stuck = True
+                        break
+                    m = np.int64(_uniform(rs) * nm)
+                    n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+                    if line:
+                        n0 = n0 % period
+                        if dim == 3:
+                            n1 = n1 % period
+                    if not _filled(words, dim, nb0, width, off, n0, n1, n2) and not (
+                        line and (n2 if dim == 3 else n1) < 0
+                    ):
+                        pos[0], pos[1], pos[2] = n0, n1, n2
+                    total += 1
+                    pending += 1
+                    budget -= 1
+                    continue
+                # Chebyshev distance to the cluster, at least 2 here: exact
+                # within a few sites (the words), then the field, then the maps
+                if ingrid:
+                    cell = maps.field_get(field, dim, width, i, j, k)
+                    if cell > 1:
+                        d = ((cell - 1) << maps.FIELD_SHIFT) + 1
+                    elif dim == 2:
+                        bx, by = i >> 3, j >> 3
+                        d = _fine2(
+                            _word(words, nb0, bx - 1, by - 1, 0), _word(words, nb0, bx, by - 1, 0),
+                            _word(words, nb0, bx + 1, by - 1, 0), _word(words, nb0, bx - 1, by, 0),
+                            words[bx + nb0 * by], _word(words, nb0, bx + 1, by, 0),
+                            _word(words, nb0, bx - 1, by + 1, 0), _word(words, nb0, bx, by + 1, 0),
+                            _word(words, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
+                        )
+                    else:
+                        d = _fine3(words, nb0, i, j, k, cube)
+                    if d >= field_far:
+                        level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
+                        d = max(d, np.int64(bound + 0.5))
+                else:
+                    d = 5  # every particle lies 4 sites inside the grid
+                free = r - (h_max if line else r_max)  # Euclidean, from the float position
+                if line:
+                    d = min(max(d, np.int64(free)), period, q[up] + 1)
+                free = max(free, d - rounding)
+                if line:
+                    free = min(free, pos[up] + 1.0)
+                reach = free - JUMP_MARGIN
+                half = min(d - 1, top)
+                if kill_factor > 0.0:
+                    reach = min(reach, kill_r - r)
+                    qr = np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]))
+                    half = min(half, np.int64((kill_r - qr) / np.sqrt(dim)) + 1)
+                if boxed:
+                    for a in range(dim):
+                        reach = min(reach, pos[a] - lo, hi - pos[a])
+                        half = min(half, q[a] - lo + 1, hi - q[a] + 1)
+                elif line and launch_box:
+                    reach = min(reach, box_hi - pos[up])
+                    half = min(half, box_hi - q[up] + 1)
                 total += 1
                 pending += 1
-                if line:
-                    return_to_plane(rng, dim, pos, launch_r, size)
-                elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
-                    need_launch = True
-                continue
-            for a in range(3):
-                q[a] = _site(pos[a])
-            if (boxed or launch_box) and _outside(q, dim, line, box_lo, box_hi):
-                need_launch = True
-                continue
-            # lower bound on the distance to the nearest particle
-            free = r - (h_max if line else r_max)
-            i, j, k = q[0] + off, q[1] + off, q[2] + off
-            if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-                level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
-                # the site rounds the walker's position by at most half a site per axis
-                bound = max(bound, maps.field_bound(field, dim, width, i, j, k) - 0.5 * np.sqrt(dim))
-                # unmarked periodic images lie at least one period away
-                free = max(free, min(bound, float(period)) if line else bound)
-            if line:
-                free = min(free, pos[up] + 1.0)
-            reach = free - JUMP_MARGIN
-            if kill_factor > 0.0:
-                reach = min(reach, kill_r - r)
-            if boxed:
-                for a in range(dim):
-                    reach = min(reach, pos[a] - lo, hi - pos[a])
-            elif line and launch_box:
-                reach = min(reach, box_hi - pos[up])
-            if jumps and reach >= 2.0:
-                direction(rng, dim, scratch)
-                for a in range(dim):
-                    pos[a] += reach * scratch[a]
+                budget -= 1
+                if reach >= CIRCLE_MIN and reach > half:
+                    _circle(rs, dim, scratch)
+                    for a in range(dim):
+                        pos[a] += reach * scratch[a]
+                elif half >= 2:
+                    # exact: where the lattice walk first leaves the square of half-width `half`
+                    u = _uniform(rs) * (t_start[half + 1] - t_start[half])
+                    e = np.int64(u)
+                    if u - e >= t_cut[t_start[half] + e]:
+                        e = t_alias[t_start[half] + e]
+                    e += t_start[half]
+                    for a in range(dim):
+                        pos[a] = q[a] + t_off[e, a]
+                else:
+                    # no particle within two sites: a plain step
+                    m = np.int64(_uniform(rs) * moves.shape[0])
+                    for a in range(dim):
+                        pos[a] = q[a] + moves[m, a]
                 if line:
                     for a in range(up):
                         pos[a] = pos[a] % period
-                total += 1
-                pending += 1
-                continue
-            stuck, taken = _near_walk(
-                words, dim, start, blocks, width, off, q, moves, period, stickiness, rng,
-                jumps, boxed or launch_box, box_lo, box_hi, kill_r if kill_factor > 0.0 else return_r,
-                max_steps - total if max_steps > 0 else 0,
-            )
-            total += taken
-            pending += taken
-            for a in range(3):
-                pos[a] = q[a]
         if stuck:
             for a in range(dim):
                 points[count, a] = q[a]
@@ -342,10 +682,12 @@ def _grow(
             for a in range(dim):
                 extent = max(extent, abs(q[a]))
             if (q[up] + off + 4 >= width) if line else (extent + 4 >= off):
-                width *= 2
+                # room for the cluster, in whole words (8 or 4 sites) of the field's cells
+                width = (int(width * GROWTH) + 15) // 16 * 16
                 if not line:
                     off = width // 2
                 words, start, blocks, cells, field = _rebuild(points, count, dim, width, off, period)
+                nb0, base1, nb1 = blocks[0], start[1], blocks[1]
             else:
                 _mark_images(words, dim, start, blocks, cells, field, width, off, q, period)
             while mi < len(marks) and marks[mi] <= count:
@@ -356,6 +698,7 @@ def _grow(
                 live -= 1
             else:
                 need_launch = True
+            stuck = False
             # with box launch, growth ends where the cluster meets the box
             if launch_box and walkers == 1 and _outside(q, dim, line, box_lo + 2, box_hi - 2):
                 status = BOUNDARY
@@ -368,20 +711,21 @@ def grow_lattice(n, p, marks, rng):
 
     Returns
     -------
-    points : int64 (n_grown, dim)
+    points : int32 (n_grown, dim)
     steps : int64 (n_grown,)
     status : int code into ``dlasweep.params.STATUSES``
     times : float64 seconds at each of ``marks`` (NaN when not reached)
     """
     dim = p["dim"]
-    points = np.zeros((n, dim), np.int64)
+    moore = p["neighbours"] != 2 * dim
+    points = np.zeros((n, dim), np.int32)
     steps = np.zeros(n, np.int64)
     times = np.full(len(marks), np.nan)
     count, status = _grow(
-        n, dim, _moves(dim, p["neighbours"] != 2 * dim), p["stickiness"],
+        n, dim, _moves(dim, moore), p["stickiness"],
         ("point", "block", "line").index(p["seed_shape"]), p["size"], p["launch"] == "box",
         p["launch_factor"], p["launch_margin"], p["kill_factor"], p["jumps"], p["walkers"],
-        p["max_steps"], marks, rng, points, steps, times,
+        p["max_steps"], marks, rng, points, steps, times, *exit_tables(dim, moore),
     )
     if count < n:  # don't keep the unused tail alive
         points, steps = points[:count].copy(), steps[:count].copy()

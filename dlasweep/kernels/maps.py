@@ -39,18 +39,33 @@ def layout(dim, width):
 
 
 @jit
-def _locate(dim, start, blocks, s, i, j, k):
-    nb = blocks[s]
+def _index(dim, base, nb, i, j, k):
+    """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side."""
     if dim == 2:
-        return start[s] + (i >> 3) + nb * (j >> 3), (i & 7) | ((j & 7) << 3)
-    return start[s] + (i >> 2) + nb * ((j >> 2) + nb * (k >> 2)), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
+        return base + (i >> 3) + nb * (j >> 3), (i & 7) | ((j & 7) << 3)
+    return base + (i >> 2) + nb * ((j >> 2) + nb * (k >> 2)), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
+
+
+@jit
+def _locate(dim, start, blocks, s, i, j, k):
+    return _index(dim, start[s], blocks[s], i, j, k)
+
+
+@jit
+def bit(words, dim, base, nb, i, j, k):
+    """``test`` with the segment given by scalars (``start[s]``, ``blocks[s]``).
+
+    Hot loops call this: a call that passes fewer arrays does less atomic
+    reference counting when numba does not inline it.
+    """
+    w, b = _index(dim, base, nb, i, j, k)
+    return (words[w] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
 
 
 @jit
 def test(words, dim, start, blocks, s, i, j, k):
     """Whether cell (i, j, k) of segment ``s`` is set (indices already offset)."""
-    w, b = _locate(dim, start, blocks, s, i, j, k)
-    return (words[w] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
+    return bit(words, dim, start[s], blocks[s], i, j, k)
 
 
 @jit
@@ -109,21 +124,19 @@ def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
     top = len(cells) - 1
     s = min(max(guess, 1), top)
     if test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
-        while s > 1:
+        s -= 1
+        while s >= 1 and test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
             s -= 1
-            if not test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
-                break
-        else:
-            return 0, 0.0
     else:
         while s < top and not test(words, dim, start, blocks, s + 1, i >> (s + 1), j >> (s + 1), k >> (s + 1)):
             s += 1
+    # one exit: numba then drops the reference counting of the arrays
     side = 1 << s
     mask = side - 1
     near = min(i & mask, side - 1 - (i & mask), j & mask, side - 1 - (j & mask))
     if dim == 3:
         near = min(near, k & mask, side - 1 - (k & mask))
-    return s, float(side + near) + 0.5
+    return s, float(side + near) + 0.5 if s > 0 else 0.0
 
 
 FIELD_SHIFT = 2
@@ -164,10 +177,8 @@ def field_mark(field, dim, width, i, j, k, cap):
 
 
 @jit
-def field_bound(field, dim, width, i, j, k):
-    """Lower bound on the distance from site (i, j, k) to the nearest particle site."""
+def field_get(field, dim, width, i, j, k):
+    """The field's value at site (i, j, k): coarse cells to the nearest particle's, capped."""
     fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
     ck = k >> FIELD_SHIFT if dim == 3 else 0
-    d = np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])
-    # d - 1 whole coarse cells lie between the two cells, and sites differ by one more
-    return float(((d - 1) << FIELD_SHIFT) + 1) if d > 0 else 0.0
+    return np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])

@@ -3,10 +3,12 @@
 Two particles touch when their centres are exactly one diameter apart.
 
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
-uniformly onto the sphere whose radius is a lower bound on its free distance
-(the largest clear level of the hierarchical occupancy maps of ``maps``,
-refined by the walker's place in its map cell, and the bounding circle of the
-cluster). Outside the launch circle it returns exactly
+uniformly onto the sphere whose radius is a lower bound on its free distance:
+near the cluster a coarse Chebyshev distance field (a byte per cell of side
+``2**FS``, capped at ``FCAP`` cells), elsewhere the largest clear level of the
+dilated maps of ``maps`` (levels 1 and up: unit-cell occupancy is never
+needed off-lattice), each refined by the walker's place in its cell, and the
+bounding circle of the cluster. Outside the launch circle it returns exactly
 (``walk.return_to_sphere``; above a substrate's launch line,
 ``walk.return_to_plane``).
 
@@ -52,6 +54,13 @@ kept in registers for the walk's directions; the Generator itself draws the
 exact returns, stickiness and Gaussian steps. Both are deterministic given
 the Generator, so a cluster is a function of its seed.
 
+Memory: besides the points (16 or 24 bytes each), the diffusion times (8)
+and the cell-list links (4), the grids take about a bit per unit cell
+(maps), a byte per cell of side ``2**FS`` (field) and 4 bytes per tile of
+64 cell-list cells (directory) over a square ``GROW`` times the cluster's
+extent, and 256 bytes per tile that holds particles. When the cluster outgrows them they are
+dropped before the larger ones are built, so the two are never held at once.
+
 Speed note: helpers that take arrays and branch must not be called from the
 hot loop (numba then wraps each call in atomic NRT incref/decref, which cost
 a third of the run time); the hot loop in ``_walk`` therefore spells out the
@@ -83,6 +92,11 @@ GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 LINE_PAD = 32
 """Periodic images are marked in the maps up to this distance (line seed)."""
+FS = 2
+"""The distance field's coarse cells have side 2**FS."""
+FCAP = (16, 4)
+"""Cap of the distance field (coarse cells), 2D and 3D; beyond it the maps
+bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap."""
 GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
 INF = np.inf
@@ -149,7 +163,8 @@ def _xseed(rng):
 #
 # gi: 0-2 index cells per axis, 3-5 tiles per axis, 6-8 map offsets,
 #     9 map width, 10-12 periodic axes, 13 tile bits, 14 tiles used,
-#     15 largest usable map level, 16 covered half-width (point) or height (line)
+#     15 largest usable map level, 16 covered half-width (point) or height (line),
+#     17 distance field cap (coarse cells)
 # gf: 0-2 index origin, 3-5 index inverse cell side, 6 period
 
 
@@ -157,7 +172,7 @@ def _xseed(rng):
 def _layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
     for point seeds, h_max for a substrate), with room to grow."""
-    gi = np.zeros(17, np.int64)
+    gi = np.zeros(18, np.int64)
     gf = np.zeros(8)
     tb = 3 if dim == 2 else 2
     gi[13] = tb
@@ -170,6 +185,7 @@ def _layout(dim, line, size, need):
         gi[16] = half
         gi[9] = 2 * half
         gi[15] = 1 << 30
+        gi[17] = FCAP[dim - 2]
         for a in range(dim):
             gi[a] = half
             gi[6 + a] = half
@@ -180,6 +196,7 @@ def _layout(dim, line, size, need):
         gi[16] = top
         gi[9] = max(size + 2 * LINE_PAD, top + 2)
         gi[15] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
+        gi[17] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
         m = size // 2
         for a in range(up):
             gi[a] = m
@@ -217,7 +234,7 @@ def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
         tile = gi[14]
         gi[14] += 1
         if (tile + 1) * 64 > len(heads):
-            bigger = np.full(2 * len(heads), -1, np.int32)
+            bigger = np.full(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
             bigger[: len(heads)] = heads
             heads = bigger
         dirr[t] = tile
@@ -228,8 +245,9 @@ def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
 
 
 @jit
-def _mark(i, pts, dim, size, gi, words, start, blocks, cells):
-    """Mark particle i in the maps, with its periodic images near the edges."""
+def _mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
+    """Mark particle i in the maps and the field, with its periodic images
+    near the edges."""
     W = gi[9]
     reach = 1 if gi[10] == 1 else 0
     reach2 = reach if dim == 3 else 0
@@ -239,32 +257,94 @@ def _mark(i, pts, dim, size, gi, words, start, blocks, cells):
             i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[7]
             i2 = int(np.floor(pts[i, 2])) + gi[8] if dim == 3 else 0
             if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
-                maps.mark(words, dim, start, blocks, cells, i0, i1, i2)
+                # a coarse cell that already holds a particle has every level from
+                # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
+                fw = (W + (1 << FS) - 1) >> FS
+                ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
+                fresh = field[ci + fw * (cj + fw * ck)] != 0
+                _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
+                if fresh:
+                    _mark_field(field, dim, fw, gi[17], ci, cj, ck)
 
 
 @jit
-def _build_grid(dim, line, size, need, pts, count, nxt):
-    """Maps and cell list for particles 0..count-1, sized for ``need``."""
+def _allocate_maps(dim, width):
+    """The dilated maps of ``maps`` for a grid of side ``width``, levels 1 and up.
+
+    Level 0 (plain occupancy, a bit per unit cell and three quarters of the
+    bits) is never queried here: contacts come from the cell list. ``start``
+    is shifted so that level s still begins at ``start[s]``.
+    """
+    start, blocks, cells = maps.layout(dim, width)
+    start -= start[min(1, len(cells) - 1)]
+    return np.zeros(start[-1], np.uint64), start, blocks, cells
+
+
+@jit
+def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
+    """Set cell (i, j, k) and its neighbours in the dilated levels 1 to top - 1."""
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    for s in range(1, top):
+        w = cells[s]
+        nb = blocks[s]
+        ci, cj, ck = i >> s, j >> s, k >> s
+        klo, khi = (max(ck - 1, 0), min(ck + 1, w - 1)) if dim == 3 else (0, 0)
+        for c in range(klo, khi + 1):
+            for b in range(max(cj - 1, 0), min(cj + 1, w - 1) + 1):
+                for a in range(max(ci - 1, 0), min(ci + 1, w - 1) + 1):
+                    q = start[s] + (a >> bs) + nb * ((b >> bs) + nb * (c >> bs))
+                    words[q] |= np.uint64(1) << np.uint64((a & bm) | ((b & bm) << bs) | ((c & bm) << (2 * bs)))
+
+
+@jit
+def _mark_field(field, dim, fw, cap, ci, cj, ck):
+    """Lower the field about a particle in coarse cell (ci, cj, ck).
+
+    ``field[c]`` is the Chebyshev distance, in coarse cells of side
+    ``2**FS`` and capped at ``cap``, from coarse cell c to the nearest coarse
+    cell holding a particle centre. Near the cluster, where most jumps are,
+    it bounds the free distance more sharply than the dilated maps.
+    """
+    r = cap - 1
+    klo, khi = (max(ck - r, 0), min(ck + r, fw - 1)) if dim == 3 else (0, 0)
+    for c in range(klo, khi + 1):
+        dk = abs(c - ck)
+        for b in range(max(cj - r, 0), min(cj + r, fw - 1) + 1):
+            dj = max(dk, abs(b - cj))
+            row = fw * (b + fw * c)
+            for a in range(max(ci - r, 0), min(ci + r, fw - 1) + 1):
+                field[row + a] = min(field[row + a], max(dj, abs(a - ci)))
+
+
+@jit
+def _build_grid(dim, line, size, need, pts, count, nxt, tiles):
+    """Maps and cell list for particles 0..count-1, sized for ``need``, with
+    room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
     gi, gf = _layout(dim, line, size, need)
-    words, start, blocks, cells = maps.allocate(dim, gi[9])
+    words, start, blocks, cells = _allocate_maps(dim, gi[9])
     ntiles = gi[3] * gi[4] * gi[5]
     dirr = np.full(ntiles, -1, np.int32)
-    heads = np.full(64 * max(64, min(ntiles, count // 4 + 16)), -1, np.int32)
+    heads = np.full(64 * (tiles + tiles // 4 + 64), -1, np.int32)
+    field = np.full(((gi[9] + (1 << FS) - 1) >> FS) ** dim, gi[17], np.uint8)
     for i in range(count):
         heads = _insert(i, pts, nxt, dim, gi, gf, dirr, heads)
-        _mark(i, pts, dim, size, gi, words, start, blocks, cells)
-    return gi, gf, words, start, blocks, cells, dirr, heads
+        _mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
+    return gi, gf, words, start, blocks, cells, dirr, heads, field
 
 
 @jit
-def _map_dist(w, dim, size, gi, words, start, blocks, cells):
-    """Lower bound on the centre distance from w to every particle, from the maps.
+def _map_dist(w, dim, size, gi, words, start, blocks, cells, field):
+    """Lower bound on the centre distance from w to every particle, from the
+    distance field and the maps.
 
-    The largest clear level s (bisection) puts every particle outside the
-    3**dim block of level-s cells around w, so the distance to that block's
-    surface, 2**s plus w's distance to its own cell's faces, bounds it.
-    Returns 0 when the level-1 cell is set (look closer), -1 off the map.
-    (``_walk`` spells this out inline.)
+    A field value d > 1 puts every particle centre d - 1 whole coarse cells
+    beyond w's coarse cell, so (d - 1) 2**FS plus w's distance to its own
+    coarse cell's faces bounds it. Where the field says little (d <= 1, or at
+    its cap), the largest clear map level s puts every particle outside the
+    3**dim block of level-s cells around w: 2**s plus w's distance to its
+    level-s cell's faces. Returns 0 when the level-1 cell is set (look
+    closer), -1 off the map. (``_walk`` spells this out inline.)
     """
     W = gi[9]
     x0 = w[0]
@@ -279,6 +359,21 @@ def _map_dist(w, dim, size, gi, words, start, blocks, cells):
     if not (0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
+    fw = (W + (1 << FS) - 1) >> FS
+    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+    dm = 0.0
+    if fd > 1:
+        side = float(1 << FS)
+        c = float((i0 >> FS) << FS)
+        f = min(X0 - c, c + side - X0)
+        c = float((i1 >> FS) << FS)
+        f = min(f, X1 - c, c + side - X1)
+        if dim == 3:
+            c = float((i2 >> FS) << FS)
+            f = min(f, X2 - c, c + side - X2)
+        dm = (fd - 1) * side + f
+    if 1 < fd < gi[17]:
+        return dm
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
     lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
@@ -293,7 +388,7 @@ def _map_dist(w, dim, size, gi, words, start, blocks, cells):
             lo = s
     s = lo
     if s == 0:
-        return 0.0
+        return dm
     side = float(1 << s)
     c = float((i0 >> s) << s)
     f = min(X0 - c, c + side - X0)
@@ -302,7 +397,7 @@ def _map_dist(w, dim, size, gi, words, start, blocks, cells):
     if dim == 3:
         c = float((i2 >> s) << s)
         f = min(f, X2 - c, c + side - X2)
-    return side + f
+    return max(dm, side + f)
 
 
 @inline
@@ -453,7 +548,7 @@ def _cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, 
 
 @jit
 def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start, blocks,
-                cells, lx, ly, lz, li, e, u, normal):
+                cells, field, lx, ly, lz, li, e, u, normal):
     """One Gaussian step with the naive end-point check; True on contact.
 
     The step is proposed from w; if its end point is free it is taken, even
@@ -466,7 +561,7 @@ def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, w
     for a in range(dim):
         e[a] = w[a] + sigma * rng.normal()
     sub = line and e[up] < 0.0
-    if not sub and _map_dist(e, dim, size, gi, words, start, blocks, cells) > 0.0:
+    if not sub and _map_dist(e, dim, size, gi, words, start, blocks, cells, field) > 0.0:
         for a in range(dim):
             w[a] = e[a]
         return False
@@ -519,7 +614,7 @@ def _contact(w, u, normal, dim, size, line, stick, rng, rs, pts, nxt, gi, gf, di
 
 @jit
 def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
-          blocks, cells, dirr, heads, geo, ip, fp, cnt, rs, rng):
+          blocks, cells, dirr, heads, field, geo, ip, fp, cnt, rs, rng):
     """Release walkers until one sticks (returns 1, w at its place) or the
     step budget runs out (returns 2).
 
@@ -542,6 +637,14 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
     ftop = min(len(cells) - 1, gi[15]) + 1
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
+    fw = (gi[9] + (1 << FS) - 1) >> FS
+    fcap = gi[17]
+    fside = float(1 << FS)
+    # a field at its cap puts every particle (cap - 1) coarse cells away, so
+    # the map levels whose 3**dim blocks fit inside that are clear
+    flo = 1
+    while flo + 1 < ftop and (2 << (flo + 1)) <= (fcap - 1) << FS:
+        flo += 1
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     total = cnt[0]
     since = cnt[1]
@@ -627,7 +730,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 else:
                     list_ok = False
             if not exact:
-                # the maps (as _map_dist, spelled out)
+                # the field and the maps (as _map_dist, spelled out)
                 x0 = w[0]
                 x1 = w[1]
                 if per:
@@ -642,7 +745,26 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 dm = -1.0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    lo, hi = 0, ftop
+                    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+                    dm = 0.0
+                    if fd > 1:
+                        # no particle in the coarse cells within fd - 1 of the walker's
+                        c = float((i0 >> FS) << FS)
+                        f = min(X0 - c, c + fside - X0)
+                        c = float((i1 >> FS) << FS)
+                        f = min(f, X1 - c, c + fside - X1)
+                        if dim == 3:
+                            c = float((i2 >> FS) << FS)
+                            f = min(f, X2 - c, c + fside - X2)
+                        dm = (fd - 1) * fside + f
+                    # the maps where the field says little: a particle within two
+                    # coarse cells sets every level from 3 up; at the cap, levels
+                    # up to flo are clear
+                    lo, hi = 0, 0
+                    if fd <= 1:
+                        hi = min(ftop, 3)
+                    elif fd >= fcap:
+                        lo, hi = flo, ftop
                     while hi - lo > 1:
                         s = (lo + hi) >> 1
                         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
@@ -653,9 +775,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                             hi = s
                         else:
                             lo = s
-                    if lo == 0:
-                        dm = 0.0
-                    else:
+                    if lo > 0:
                         side = float(1 << lo)
                         c = float((i0 >> lo) << lo)
                         f = min(X0 - c, c + side - X0)
@@ -664,7 +784,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                         if dim == 3:
                             c = float((i2 >> lo) << lo)
                             f = min(f, X2 - c, c + side - X2)
-                        dm = side + f
+                        dm = max(dm, side + f)
                 if dm > 0.0:
                     g = max(ggeo, dm - 1.0)
                 elif dm < 0.0:
@@ -762,7 +882,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 since += 1
                 list_ok = False
                 if _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
-                               blocks, cells, mx, my, mz, mi, scratch, u, normal):
+                               blocks, cells, field, mx, my, mz, mi, scratch, u, normal):
                     if stick >= 1.0 or rng.random() < stick:
                         code = 1
                         break
@@ -790,8 +910,10 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
 
 @jit
 def _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid):
-    """Add the walker at w to the cluster; returns the new count and grid."""
-    gi, gf, words, start, blocks, cells, dirr, heads = grid
+    """Add the walker at w to the cluster; returns the new count, the grid
+    and whether the cluster outgrew it (then the particle is not yet in it:
+    the caller drops the grid and builds a larger one)."""
+    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
     up = dim - 1
     if line:
         for a in range(up):
@@ -811,10 +933,19 @@ def _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid):
     count += 1
     need = geo[2] if line else geo[1]
     if need + 8.0 > gi[16]:
-        return count, _build_grid(dim, line, size, need, pts, count, nxt)
+        return count, grid, True
     heads = _insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
-    _mark(count - 1, pts, dim, size, gi, words, start, blocks, cells)
-    return count, (gi, gf, words, start, blocks, cells, dirr, heads)
+    _mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
+    return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), False
+
+
+@jit
+def _no_grid():
+    """An empty grid: the caller drops its old grid's arrays by taking this
+    before it builds the new one, so the two are never held at once."""
+    z = np.zeros(1, np.int64)
+    return (np.zeros(18, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
+            np.zeros(0, np.int32), np.zeros(0, np.uint8))
 
 
 @jit
@@ -839,7 +970,7 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
             r2 += pts[q, a] ** 2
             geo[1] = max(geo[1], abs(pts[q, a]))
         geo[0] = max(geo[0], np.sqrt(r2))
-    grid = _build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt)
+    grid = _build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
     rs = _xseed(rng)
     km = 0
     while km < nm and marks[km] <= count:
@@ -880,13 +1011,18 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
             break
         fp[0] = R
         fp[1] = kf * R
-        gi, gf, words, start, blocks, cells, dirr, heads = grid
+        gi, gf, words, start, blocks, cells, dirr, heads, field = grid
         code = _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
-                     blocks, cells, dirr, heads, geo, ip, fp, cnt, rs, rng)
+                     blocks, cells, dirr, heads, field, geo, ip, fp, cnt, rs, rng)
         if code == 2:
             status = STEP_LIMIT
             break
-        count, grid = _attach(w, count, cnt[1], pts, steps, nxt, geo, dim, line, size, grid)
+        count, grid, full = _attach(w, count, cnt[1], pts, steps, nxt, geo, dim, line, size, grid)
+        if full:
+            tiles = gi[14]
+            grid = _no_grid()
+            gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+            grid = _build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
         cnt[1] = 0
         while km < nm and marks[km] <= count:
             times[km] = clock() - t0
@@ -902,7 +1038,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
     up = dim - 1
     nm = len(marks)
     hb = 0.5 * size
-    gi, gf, words, start, blocks, cells, dirr, heads = grid
+    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
     pos = np.zeros((nwalk, 3))
     alive = np.ones(nwalk, np.bool_)
     w = np.zeros(3)
@@ -938,7 +1074,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
                 break
             for a in range(3):
                 w[a] = pos[k, a]
-            dm = _map_dist(w, dim, size, gi, words, start, blocks, cells)
+            dm = _map_dist(w, dim, size, gi, words, start, blocks, cells, field)
             if dm == 0.0 and _gather(w, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi) > 0:
                 alive[k] = False  # a particle attached on top of it: merged
                 live -= 1
@@ -955,7 +1091,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
                     contact = _cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
             else:
                 contact = _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
-                                      blocks, cells, mx, my, mz, mi, e, u, normal)
+                                      blocks, cells, field, mx, my, mz, mi, e, u, normal)
             stuck = False
             if contact:
                 if sigma > 0.0:
@@ -966,8 +1102,13 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
                     total += moves
                     since += moves
             if stuck:
-                count, grid = _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid)
-                gi, gf, words, start, blocks, cells, dirr, heads = grid
+                count, grid, full = _attach(w, count, since, pts, steps, nxt, geo, dim, line, size, grid)
+                if full:
+                    tiles = gi[14]
+                    grid = _no_grid()
+                    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+                    grid = _build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
+                gi, gf, words, start, blocks, cells, dirr, heads, field = grid
                 since = 0
                 alive[k] = False
                 live -= 1
