@@ -19,7 +19,7 @@ import numpy as np
 
 from .._jit import clock, jit
 from . import maps
-from .walk import below, direction, return_to_plane, return_to_sphere
+from .walk import below, direction, return_to_plane, return_to_sphere, seed_stream, uniform, unit_vector
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -137,59 +137,6 @@ def exit_tables(dim, moore):
 
 
 @jit
-def _seed_state(rng):
-    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded).
-
-    The hot loop draws from this small generator kept in an array: numpy's
-    Generator costs several times more per draw from numba.
-    """
-    rs = np.zeros(4, np.uint64)
-    z = np.uint64(rng.integers(1, 2**62))
-    for a in range(4):
-        z += np.uint64(0x9E3779B97F4A7C15)
-        x = z
-        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        rs[a] = x ^ (x >> np.uint64(31))
-    return rs
-
-
-@jit
-def _uniform(rs):
-    """xoshiro256+: a double in [0, 1) from state ``rs``."""
-    s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
-    out = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-    t = s1 << np.uint64(17)
-    s2 ^= s0
-    s3 ^= s1
-    s1 ^= s2
-    s0 ^= s3
-    s2 ^= t
-    rs[0], rs[1], rs[2] = s0, s1, s2
-    rs[3] = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
-    return out
-
-
-@jit
-def _circle(rs, dim, out):
-    """A uniform unit vector into ``out`` (rejection, no trigonometry)."""
-    while True:
-        u = 2.0 * _uniform(rs) - 1.0
-        v = 2.0 * _uniform(rs) - 1.0
-        s = u * u + v * v
-        if 0.0 < s < 1.0:
-            break
-    if dim == 2:
-        out[0] = (u * u - v * v) / s
-        out[1] = 2.0 * u * v / s
-        return
-    f = 2.0 * np.sqrt(1.0 - s)
-    out[0] = u * f
-    out[1] = v * f
-    out[2] = 1.0 - 2.0 * s
-
-
-@jit
 def _site(x):
     return np.int64(np.floor(x + 0.5))
 
@@ -279,9 +226,9 @@ def _near_step(words, dim, start, blocks, width, off, q, moves, period, stickine
     line = period > 0
     if near or (line and q[up] <= 1):
         if _in_contact(words, dim, start, blocks, width, off, q, moves, period):
-            if stickiness >= 1.0 or _uniform(rs) < stickiness:
+            if stickiness >= 1.0 or uniform(rs) < stickiness:
                 return True
-    m = np.int64(_uniform(rs) * moves.shape[0])
+    m = np.int64(uniform(rs) * moves.shape[0])
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
     if line:
         n0 = n0 % period
@@ -422,7 +369,7 @@ def _grow(
     boxed = size > 0 and not line
     lo = -(size // 2)
     hi = size - 1 + lo
-    rs = _seed_state(rng)
+    rs = seed_stream(rng)
     top = TABLE_MAX[dim]
     rounding = 0.5 * np.sqrt(dim)
     field_far = ((FIELD_CAP[dim] - 1) << maps.FIELD_SHIFT) + 1  # the field's largest bound  # how far a site can be from the point it rounds
@@ -588,10 +535,10 @@ def _grow(
                         if _filled(words, dim, nb0, width, off, n0, n1, n2):
                             touch = True
                             break
-                    if touch and (stickiness >= 1.0 or _uniform(rs) < stickiness):
+                    if touch and (stickiness >= 1.0 or uniform(rs) < stickiness):
                         stuck = True
                         break
-                    m = np.int64(_uniform(rs) * nm)
+                    m = np.int64(uniform(rs) * nm)
                     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
                     if line:
                         n0 = n0 % period
@@ -650,12 +597,12 @@ def _grow(
                 pending += 1
                 budget -= 1
                 if reach >= CIRCLE_MIN and reach > half:
-                    _circle(rs, dim, scratch)
+                    unit_vector(rs, dim, scratch)
                     for a in range(dim):
                         pos[a] += reach * scratch[a]
                 elif half >= 2:
                     # exact: where the lattice walk first leaves the square of half-width `half`
-                    u = _uniform(rs) * (t_start[half + 1] - t_start[half])
+                    u = uniform(rs) * (t_start[half + 1] - t_start[half])
                     e = np.int64(u)
                     if u - e >= t_cut[t_start[half] + e]:
                         e = t_alias[t_start[half] + e]
@@ -664,7 +611,7 @@ def _grow(
                         pos[a] = q[a] + t_off[e, a]
                 else:
                     # no particle within two sites: a plain step
-                    m = np.int64(_uniform(rs) * moves.shape[0])
+                    m = np.int64(uniform(rs) * moves.shape[0])
                     for a in range(dim):
                         pos[a] = q[a] + moves[m, a]
                 if line:

@@ -72,7 +72,7 @@ import numpy as np
 
 from .._jit import clock, inline, jit
 from . import maps
-from .walk import return_to_plane, return_to_sphere
+from .walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir, xo
 
 
 POINT, BLOCK, LINE = 0, 1, 2
@@ -100,63 +100,6 @@ bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap.""
 GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
 INF = np.inf
-
-
-# ------------------------------------------------------------------ rng -----
-
-
-@inline
-def _xo(s0, s1, s2, s3):
-    """xoshiro256+ step: new state and a double in [0, 1)."""
-    r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-    t = s1 << np.uint64(17)
-    s2 ^= s0
-    s3 ^= s1
-    s1 ^= s2
-    s0 ^= s3
-    s2 ^= t
-    s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
-    return s0, s1, s2, s3, r
-
-
-@inline
-def _xdir(s0, s1, s2, s3, dim):
-    """Uniform unit vector by rejection from the unit disk (2D: normalise;
-    3D: Marsaglia's map), without sin/cos."""
-    while True:
-        s0, s1, s2, s3, a = _xo(s0, s1, s2, s3)
-        s0, s1, s2, s3, b = _xo(s0, s1, s2, s3)
-        x = 2.0 * a - 1.0
-        y = 2.0 * b - 1.0
-        q = x * x + y * y
-        if 0.0 < q < 1.0:
-            break
-    if dim == 2:
-        inv = 1.0 / np.sqrt(q)
-        return s0, s1, s2, s3, x * inv, y * inv, 0.0
-    f = 2.0 * np.sqrt(1.0 - q)
-    return s0, s1, s2, s3, x * f, y * f, 1.0 - 2.0 * q
-
-
-@jit
-def _rdir(rs, dim, u):
-    """Uniform unit vector into u from the xoshiro state array rs."""
-    s0, s1, s2, s3, u[0], u[1], u[2] = _xdir(rs[0], rs[1], rs[2], rs[3], dim)
-    rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
-
-
-@jit
-def _xseed(rng):
-    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded)."""
-    rs = np.zeros(4, np.uint64)
-    z = np.uint64(rng.integers(1, 2**62))
-    for k in range(4):
-        z += np.uint64(0x9E3779B97F4A7C15)
-        x = z
-        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        rs[k] = x ^ (x >> np.uint64(31))
-    return rs
 
 
 # ---------------------------------------------------------------- grid -----
@@ -599,7 +542,7 @@ def _contact(w, u, normal, dim, size, line, stick, rng, rs, pts, nxt, gi, gf, di
     while True:
         if stick >= 1.0 or rng.random() < stick:
             return True, moves
-        _rdir(rs, dim, u)
+        unit_vector(rs, dim, u)
         dot = u[0] * normal[0] + u[1] * normal[1] + u[2] * normal[2]
         if dot < 0.0:
             for a in range(3):
@@ -666,7 +609,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 w[a] = rng.random() * size
             w[up] = R
         else:
-            s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+            s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
             w[0] = R * u0
             w[1] = R * u1
             w[2] = R * u2
@@ -807,7 +750,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
             g = min(g, gb)
             # ---- move
             if sigma == 0.0 and jumps and g >= EPS:
-                s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 w[0] += g * u0
                 w[1] += g * u1
                 w[2] += g * u2
@@ -826,7 +769,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                     anchor[2] = w[2]
                     nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
                     list_ok = True
-                s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 total += 1
                 since += 1
                 best = RAY
@@ -861,7 +804,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 contact = True
             elif sigma == 0.0:
                 # single unit steps everywhere (jumps=false)
-                s0, s1, s2, s3, u[0], u[1], u[2] = _xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u[0], u[1], u[2] = xdir(s0, s1, s2, s3, dim)
                 total += 1
                 since += 1
                 if g > 1.0:
@@ -871,7 +814,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 contact = _cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
             else:
                 if jumps and g > GAUSS_JUMP * sigma:
-                    s0, s1, s2, s3, u0, u1, u2 = _xdir(s0, s1, s2, s3, dim)
+                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                     w[0] += g * u0
                     w[1] += g * u1
                     w[2] += g * u2
@@ -971,7 +914,7 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
             geo[1] = max(geo[1], abs(pts[q, a]))
         geo[0] = max(geo[0], np.sqrt(r2))
     grid = _build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
-    rs = _xseed(rng)
+    rs = seed_stream(rng)
     km = 0
     while km < nm and marks[km] <= count:
         times[km] = clock() - t0
@@ -1082,7 +1025,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
             total += 1
             since += 1
             if sigma == 0.0:
-                _rdir(rs, dim, u)
+                unit_vector(rs, dim, u)
                 if dm > 2.0:
                     for a in range(3):
                         w[a] += u[a]

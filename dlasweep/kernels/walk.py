@@ -1,12 +1,75 @@
 """Exact random-walk moves shared by every model.
 
 Uniform directions, walk-on-spheres jumps, and the exact return of a walker
-from outside the launch circle/sphere or above the launch line/plane.
+from outside the launch circle/sphere or above the launch line/plane; and the
+kernels' hot-loop random stream, a xoshiro256+ generator seeded from the
+numpy Generator (numpy's Generator costs several times more per draw from
+numba).
 """
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import inline, jit
+
+
+@jit
+def seed_stream(rng):
+    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded)."""
+    rs = np.zeros(4, np.uint64)
+    z = np.uint64(rng.integers(1, 2**62))
+    for k in range(4):
+        z += np.uint64(0x9E3779B97F4A7C15)
+        x = z
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        rs[k] = x ^ (x >> np.uint64(31))
+    return rs
+
+
+@inline
+def xo(s0, s1, s2, s3):
+    """xoshiro256+ step on a state kept in registers: new state and a double in [0, 1)."""
+    r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    t = s1 << np.uint64(17)
+    s2 ^= s0
+    s3 ^= s1
+    s1 ^= s2
+    s0 ^= s3
+    s2 ^= t
+    s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
+    return s0, s1, s2, s3, r
+
+
+@inline
+def xdir(s0, s1, s2, s3, dim):
+    """Uniform unit vector by rejection from the unit disk (2D: normalise;
+    3D: Marsaglia's map), without sin/cos; the state in registers."""
+    while True:
+        s0, s1, s2, s3, a = xo(s0, s1, s2, s3)
+        s0, s1, s2, s3, b = xo(s0, s1, s2, s3)
+        x = 2.0 * a - 1.0
+        y = 2.0 * b - 1.0
+        q = x * x + y * y
+        if 0.0 < q < 1.0:
+            break
+    if dim == 2:
+        inv = 1.0 / np.sqrt(q)
+        return s0, s1, s2, s3, x * inv, y * inv, 0.0
+    f = 2.0 * np.sqrt(1.0 - q)
+    return s0, s1, s2, s3, x * f, y * f, 1.0 - 2.0 * q
+
+
+@jit
+def uniform(rs):
+    """A double in [0, 1) from the stream state ``rs`` (``seed_stream``)."""
+    rs[0], rs[1], rs[2], rs[3], r = xo(rs[0], rs[1], rs[2], rs[3])
+    return r
+
+
+@jit
+def unit_vector(rs, dim, out):
+    """A uniform unit vector into ``out[:3]`` from the stream state ``rs``."""
+    rs[0], rs[1], rs[2], rs[3], out[0], out[1], out[2] = xdir(rs[0], rs[1], rs[2], rs[3], dim)
 
 
 @jit
