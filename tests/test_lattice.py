@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from dlasweep.kernels.lattice import TABLE_MAX, _moves, exit_law, exit_tables
+from dlasweep.kernels import maps
+from dlasweep.kernels.lattice import TABLE_MAX, _fine3, _moves, _symmetry, exit_law, exit_tables
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -56,15 +57,99 @@ def test_exit_law_matches_single_steps(dim, moore, r):
     assert stat < chi2.ppf(0.999, len(classes) - 1)
 
 
-@pytest.mark.parametrize("dim, moore", [(2, False), (3, True)])
+@pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
 def test_alias_tables_reproduce_the_law(dim, moore):
-    """The alias table's implied probabilities equal the exit law exactly."""
+    """The tables' classes, spread uniformly over their orbits, give the exit law exactly."""
     start, cut, alias, offsets = exit_tables(dim, moore)
+    group = 8 if dim == 2 else 48
     for r in (2, 7, TABLE_MAX[dim]):
         lo, hi = start[r], start[r + 1]
         k = hi - lo
         implied = cut[lo:hi] / k
         np.add.at(implied, alias[lo:hi], (1 - cut[lo:hi]) / k)
+        law = {}
+        for rep, p in zip(offsets[lo:hi], implied):
+            for g in range(group):
+                site = _symmetry(g, dim, *rep.astype(np.int64))[:dim]
+                law[site] = law.get(site, 0.0) + p / group
         sites, probs = exit_law(dim, moore, r)
-        assert (offsets[lo:hi, :dim] == sites).all()
-        np.testing.assert_allclose(implied, probs, rtol=1e-9, atol=1e-15)
+        assert sorted(law) == sorted(map(tuple, sites))
+        np.testing.assert_allclose([law[tuple(s)] for s in sites], probs, rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_symmetries_are_the_whole_group(dim):
+    """Every signed permutation of the axes, each once."""
+    group = 8 if dim == 2 else 48
+    images = {_symmetry(g, dim, 1, 2, 3)[:dim] for g in range(group)}
+    assert len(images) == group
+    assert all(sorted(map(abs, s)) == list(range(1, dim + 1)) for s in images)
+
+
+def test_fine_distance_matches_brute_force_3d():
+    """``_fine3`` (word masks) against the Chebyshev distance to every particle, capped at 5."""
+    rng = np.random.default_rng(0)
+    width = 32
+    for density in (0.0005, 0.002, 0.01, 0.05):
+        for _ in range(20):
+            words, start, blocks, cells = maps.allocate(3, width)
+            pts = np.argwhere(rng.random((width,) * 3) < density)
+            for i, j, k in pts:
+                maps.mark(words, 3, start, blocks, cells, i, j, k)
+            cube = np.zeros(27, np.uint64)
+            for q in rng.integers(0, width, (50, 3)):
+                d = np.abs(pts - q).max(1).min() if len(pts) else 5
+                assert _fine3(words, blocks[0], q[0], q[1], q[2], cube) == min(d, 5)
+
+
+def _random_points(rng, dim, width, density):
+    pts = np.argwhere(rng.random((width,) * dim) < density)
+    rng.shuffle(pts)
+    return [list(p) + [0] * (3 - dim) for p in pts]
+
+
+@pytest.mark.parametrize("dim, width", [(2, 150), (3, 40)])
+def test_maps_match_brute_force(dim, width):
+    """``maps.mark`` (which skips levels a word's earlier particle marked) and
+    ``maps.free_bound`` (from every guess) against the dilated maps built directly."""
+    rng = np.random.default_rng(3)
+    start, blocks, cells = maps.layout(dim, width)
+    for density in (0.0005, 0.005, 0.05):
+        pts = _random_points(rng, dim, width, density)
+        words = maps.allocate(dim, width)[0]
+        for p in pts:
+            maps.mark(words, dim, start, blocks, cells, *p)
+        clear_top = {}
+        for s in range(1, len(cells)):
+            occ = np.zeros((cells[s] + 2,) * dim, bool)  # a margin, so that rolling adds nothing
+            for p in pts:
+                occ[tuple(np.array(p[:dim]) >> s)] = True
+            dil = np.zeros_like(occ)
+            for shift in np.ndindex(*(3,) * dim):
+                dil |= np.roll(occ, tuple(o - 1 for o in shift), axis=tuple(range(dim)))
+            for c in np.ndindex(*(cells[s],) * dim):
+                q = list(c) + [0] * (3 - dim)
+                assert maps.test(words, dim, start, blocks, s, *q) == dil[c]
+            clear_top[s] = dil
+        for q in rng.integers(0, width, (30, dim)):
+            best = 0
+            while best + 1 < len(cells) and not clear_top[best + 1][tuple(q >> (best + 1))]:
+                best += 1
+            q = list(q) + [0] * (3 - dim)
+            for guess in range(len(cells) + 1):
+                assert maps.free_bound(words, dim, start, blocks, cells, *q, guess)[0] == best
+
+
+@pytest.mark.parametrize("dim, width, cap", [(2, 96, 16), (3, 48, 6)])
+def test_field_fill_matches_field_mark(dim, width, cap):
+    """Seeds plus the two-pass fill give the field that per-particle marking gives."""
+    rng = np.random.default_rng(2)
+    for density in (0.0001, 0.001, 0.01):
+        pts = _random_points(rng, dim, width, density)
+        marked = maps.field_allocate(dim, width, cap)
+        filled = maps.field_allocate(dim, width, cap)
+        for p in pts:
+            maps.field_mark(marked, dim, width, *p, cap)
+            maps.field_mark(filled, dim, width, *p, 1)
+        maps.field_fill(filled, dim, width, cap)
+        assert (marked == filled).all()

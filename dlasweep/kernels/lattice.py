@@ -1,12 +1,13 @@
 """Square and simple-cubic lattice DLA.
 
 Near the cluster the walk is an exact lattice random walk. A walker whose
-nearest particle is at Chebyshev distance ``d >= 3`` jumps, in one draw, to
-where the lattice walk first leaves the square (cube) of half-width ``d - 1``
-around it (``exit_tables``): no site inside touches the cluster, so this is
-exact, and every contact is still a lattice contact. Within two sites it takes
-single steps. ``d`` comes from the bit-packed occupancy words near the walker,
-a coarse Chebyshev distance field and the hierarchical maps (``maps``).
+nearest particle is at Chebyshev distance ``d >= 3`` jumps to where the
+lattice walk first leaves the square (cube) of half-width ``d - 1`` around it:
+one draw picks a symmetry class of exit sites (``exit_tables``), a second a
+uniform symmetry of the square (cube). No site inside touches the cluster, so
+this is exact, and every contact is still a lattice contact. Within two sites
+it takes single steps. ``d`` comes from the bit-packed occupancy words near the
+walker, a coarse Chebyshev distance field and the hierarchical maps (``maps``).
 Far from the cluster (beyond the distances the tables cover) the walker moves
 by walk-on-circles/spheres jumps, which treat the lattice walk as Brownian at
 scales of ``CIRCLE_MIN`` sites and more; outside the launch circle it returns
@@ -19,7 +20,7 @@ import numpy as np
 
 from .._jit import clock, jit
 from . import maps
-from .walk import below, direction, return_to_plane, return_to_sphere, seed_stream, uniform, unit_vector
+from .walk import below, direction, return_to_plane, return_to_sphere, seed_stream, uniform, xdir, xo
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -27,7 +28,6 @@ JUMP_MARGIN = 2.0  # sites kept between a circle jump and the nearest particle
 CIRCLE_MIN = 16.0  # smallest circle jump: below it the exact square jumps do the work
 FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, in cells of 4 sites
 TABLE_MAX = (0, 0, 64, 24)  # by dimension: largest square (cube) half-width with an exit table
-FINE_CAP = (0, 0, 9, 5)  # by dimension: the occupancy words give exact distances below this
 GROWTH = 1.25  # the grid's side grows by this factor when the cluster outgrows it
 
 
@@ -111,29 +111,73 @@ def _alias(probs):
     return cut, alias
 
 
+def symmetry_classes(sites, probs):
+    """Pool an exit law by orbits of the square's (cube's) symmetry group.
+
+    The law is invariant under axis permutations and reflections, so it is
+    the law of a class (its orbit's total) followed by a uniform symmetry
+    applied to the class's representative, the sorted absolute coordinates.
+
+    Returns
+    -------
+    reps : int (C, dim), representatives, sorted
+    probs : float (C,), the classes' probabilities
+    """
+    keys = np.sort(np.abs(sites), axis=1)
+    reps, inverse = np.unique(keys, axis=0, return_inverse=True)
+    return reps, np.bincount(inverse.reshape(-1), weights=probs, minlength=len(reps))
+
+
 @lru_cache(maxsize=None)
 def exit_tables(dim, moore):
-    """Alias tables of ``exit_law`` for half-widths 0..TABLE_MAX[dim] (0 and 1 empty).
+    """Alias tables of ``exit_law`` by symmetry class (``symmetry_classes``) for
+    half-widths 0..TABLE_MAX[dim] (0 and 1 empty).
+
+    One class per orbit keeps the tables 8 (2D) or 48 (3D) times smaller, so
+    they stay in cache though the jumps read them at random.
 
     Returns
     -------
     start : int64 (R + 2,), entries of half-width r are start[r]:start[r + 1]
     cut, alias : float64, int32 (K,), the alias table (alias indices are local to r)
-    offsets : int8 (K, 3)
+    offsets : int8 (K, 3), the classes' representatives
     """
     top = TABLE_MAX[dim]
     start = np.zeros(top + 2, np.int64)
     cuts, aliases, offsets = [], [], []
     for r in range(2, top + 1):
-        sites, probs = exit_law(dim, moore, r)
+        reps, probs = symmetry_classes(*exit_law(dim, moore, r))
         cut, alias = _alias(probs)
         cuts.append(cut)
         aliases.append(alias)
         off = np.zeros((len(probs), 3), np.int8)
-        off[:, :dim] = sites
+        off[:, :dim] = reps
         offsets.append(off)
         start[r + 1:] = start[r] + len(probs)
     return start, np.concatenate(cuts), np.concatenate(aliases), np.concatenate(offsets)
+
+
+@jit
+def _symmetry(g, dim, o0, o1, o2):
+    """Symmetry ``g`` (0..7 in 2D, 0..47 in 3D) of the square (cube) applied to (o0, o1, o2).
+
+    Bits 0..dim-1 of ``g`` reflect the axes; the rest pick one of the dim!
+    axis permutations (a cyclic shift, then perhaps a swap).
+    """
+    p = g >> dim
+    if dim == 3:
+        for _ in range(p >> 1):
+            o0, o1, o2 = o1, o2, o0
+        p &= 1
+    if p:
+        o0, o1 = o1, o0
+    if g & 1:
+        o0 = -o0
+    if g & 2:
+        o1 = -o1
+    if dim == 3 and g & 4:
+        o2 = -o2
+    return o0, o1, o2
 
 
 @jit
@@ -142,11 +186,14 @@ def _site(x):
 
 
 @jit
-def _mark_images(words, dim, start, blocks, cells, field, width, off, q, period):
-    """Mark a particle at site q, with its periodic images for substrates."""
+def _mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
+    """Mark a particle at site q, with its periodic images for substrates.
+
+    ``cap`` 1 marks only the particle's own cell of the field (for
+    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``.
+    """
     reach = 1 if period > 0 else 0
     zreach = reach if dim == 3 else 0
-    cap = FIELD_CAP[dim]
     for a in range(-reach, reach + 1):
         for b in range(-zreach, zreach + 1):
             i = q[0] + a * period + off
@@ -165,7 +212,8 @@ def _rebuild(points, count, dim, width, off, period):
     for p in range(count):
         for a in range(dim):
             q[a] = points[p, a]
-        _mark_images(words, dim, start, blocks, cells, field, width, off, q, period)
+        _mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
+    maps.field_fill(field, dim, width, FIELD_CAP[dim])
     return words, start, blocks, cells, field
 
 
@@ -178,12 +226,16 @@ def _occupied(words, dim, start, blocks, width, off, q0, q1, q2):
 
 
 @jit
-def _filled(words, dim, nb, width, off, q0, q1, q2):
-    """``_occupied`` with the layout as scalars, for the hot loop."""
+def _cell(dim, nb, width, off, q0, q1, q2):
+    """Word and bit of site q in the occupancy segment, word -1 outside the grid.
+
+    Scalars only, for the hot loop, which reads the word itself: a helper
+    that takes the array costs atomic reference counting per call.
+    """
     i, j, k = q0 + off, q1 + off, q2 + off
     if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
-        return False
-    return maps.bit(words, dim, 0, nb, i, j, k)
+        return -1, 0
+    return maps.index(dim, 0, nb, i, j, k)
 
 
 @jit
@@ -320,40 +372,71 @@ def _fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
 
 
 @jit
+def _band(x, r, a, width):
+    """Sites x - r..x + r (of the 12 across three words) within word a, as
+    groups of ``width`` bits, one group per site of the word's 4."""
+    lo = max(x - r - 4 * a, 0)
+    hi = min(x + r - 4 * a, 3)
+    if lo > hi:
+        return np.uint64(0)
+    ones = np.uint64(0xFFFFFFFFFFFFFFFF) >> np.uint64(64 - (hi - lo + 1) * width)
+    return ones << np.uint64(lo * width)
+
+
+@jit
+def _masks(x, r, width, repeat):
+    """Masks of sites x - r..x + r along one axis in its three words: ``_band``
+    repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
+    return (
+        _band(x, r, 0, width) * np.uint64(repeat),
+        _band(x, r, 1, width) * np.uint64(repeat),
+        _band(x, r, 2, width) * np.uint64(repeat),
+    )
+
+
+@jit
 def _fine3(words, nb, i, j, k, cube):
     """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5.
 
-    As ``_fine2`` with the 3x3x3 words (4x4x4 sites each) around the walker's,
-    copied into ``cube`` once: rows of 12 sites along x, OR-ed over the
-    (y, z) squares of growing size.
+    The 3x3x3 words (4x4x4 sites each, bit x + 4 y + 16 z) around the
+    walker's cover 4 sites on every side; the cube of half-width r is hit
+    when a word AND-ed with the masks of its x, y and z ranges is nonzero.
+    Whole words at a time, and a bisection over r: three rounds at most.
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
+    inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
+    any_set = np.uint64(0)
     for c in range(3):
         for b in range(3):
+            row = bx - 1 + nb * (by + b - 1 + nb * (bz + c - 1))
             for a in range(3):
-                cube[a + 3 * (b + 3 * c)] = _word(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+                # away from the grid's faces, no bounds to check
+                w = words[row + a] if inside else _word(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+                cube[a + 3 * (b + 3 * c)] = w
+                any_set |= w
+    if any_set == 0:
+        return 5
     x = (i & 3) + 4
     y = (j & 3) + 4
     z = (k & 3) + 4
-    seen = np.uint64(0)
-    found = 5
-    for r in range(5):
-        for zz in range(z - r, z + r + 1):
-            edge = zz == z - r or zz == z + r
-            for yy in range(y - r, y + r + 1):
-                if not edge and yy != y - r and yy != y + r:
-                    continue
-                w = 3 * ((yy >> 2) + 3 * (zz >> 2))
-                shift = np.uint64(4 * (yy & 3) + 16 * (zz & 3))
-                seen |= (
-                    ((cube[w] >> shift) & np.uint64(15))
-                    | (((cube[w + 1] >> shift) & np.uint64(15)) << np.uint64(4))
-                    | (((cube[w + 2] >> shift) & np.uint64(15)) << np.uint64(8))
-                )
-        if (seen >> np.uint64(x - r)) & ((np.uint64(1) << np.uint64(2 * r + 1)) - np.uint64(1)) != 0:
-            found = r
-            break
-    return found
+    lo, hi = 0, 5  # the distance (5: none within 4) is in lo..hi
+    while lo < hi:
+        r = (lo + hi) >> 1
+        mx0, mx1, mx2 = _masks(x, r, 1, 0x1111111111111111)
+        my0, my1, my2 = _masks(y, r, 4, 0x0001000100010001)
+        mz0, mz1, mz2 = _masks(z, r, 16, 1)
+        hit = np.uint64(0)
+        for c in range(3):
+            mz = mz0 if c == 0 else (mz1 if c == 1 else mz2)
+            for b in range(3):
+                myz = mz & (my0 if b == 0 else (my1 if b == 1 else my2))
+                w = 3 * (b + 3 * c)
+                hit |= myz & ((cube[w] & mx0) | (cube[w + 1] & mx1) | (cube[w + 2] & mx2))
+        if hit != 0:
+            hi = r
+        else:
+            lo = r + 1
+    return lo
 
 
 @jit
@@ -371,6 +454,7 @@ def _grow(
     hi = size - 1 + lo
     rs = seed_stream(rng)
     top = TABLE_MAX[dim]
+    group = 8 if dim == 2 else 48  # symmetries of the square (cube)
     rounding = 0.5 * np.sqrt(dim)
     field_far = ((FIELD_CAP[dim] - 1) << maps.FIELD_SHIFT) + 1  # the field's largest bound  # how far a site can be from the point it rounds
 
@@ -483,7 +567,9 @@ def _grow(
             # unit gap spares a walker that rounding put a hair outside it
             return_r = launch_r + 1.0 if kill_factor == 0.0 and not boxed and not launch_box else 0.0
             budget = max_steps - total if max_steps > 0 else np.int64(-1)
-            # one walker's moves until it sticks, leaves, or spends the budget
+            # one walker's moves until it sticks, leaves, or spends the budget;
+            # the stream's state lives in registers meanwhile
+            s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
             while budget != 0:
                 r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
                 if kill_factor > 0.0 and r > kill_r:
@@ -505,11 +591,13 @@ def _grow(
                     need_launch = True
                     break
                 if not jumps:
+                    rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
                     stuck, taken = _near_walk(
                         words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
                         boxed or launch_box, box_lo, box_hi, kill_r if kill_factor > 0.0 else return_r,
                         max(budget, 0),
                     )
+                    s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
                     total += taken
                     pending += taken
                     for a in range(3):
@@ -518,7 +606,10 @@ def _grow(
                 i, j, k = q[0] + off, q[1] + off, q[2] + off
                 ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
                 # the level-1 map is clear unless a particle is within three sites
-                near = ingrid and maps.bit(words, dim, base1, nb1, i >> 1, j >> 1, k >> 1)
+                near = False
+                if ingrid:
+                    cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
+                    near = (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
                 if near or (line and q[up] <= 1):
                     # a single lattice step, written out: calls that pass
                     # arrays would cost atomic reference counting
@@ -532,21 +623,26 @@ def _grow(
                             n0 = n0 % period
                             if dim == 3:
                                 n1 = n1 % period
-                        if _filled(words, dim, nb0, width, off, n0, n1, n2):
+                        cw, cb = _cell(dim, nb0, width, off, n0, n1, n2)
+                        if cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0):
                             touch = True
                             break
-                    if touch and (stickiness >= 1.0 or uniform(rs) < stickiness):
+                    if touch and stickiness < 1.0:
+                        s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                        touch = u < stickiness
+                    if touch:
                         stuck = True
                         break
-                    m = np.int64(uniform(rs) * nm)
+                    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                    m = np.int64(u * nm)
                     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
                     if line:
                         n0 = n0 % period
                         if dim == 3:
                             n1 = n1 % period
-                    if not _filled(words, dim, nb0, width, off, n0, n1, n2) and not (
-                        line and (n2 if dim == 3 else n1) < 0
-                    ):
+                    cw, cb = _cell(dim, nb0, width, off, n0, n1, n2)
+                    filled = cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
+                    if not filled and not (line and (n2 if dim == 3 else n1) < 0):
                         pos[0], pos[1], pos[2] = n0, n1, n2
                     total += 1
                     pending += 1
@@ -597,26 +693,32 @@ def _grow(
                 pending += 1
                 budget -= 1
                 if reach >= CIRCLE_MIN and reach > half:
-                    unit_vector(rs, dim, scratch)
-                    for a in range(dim):
-                        pos[a] += reach * scratch[a]
+                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                    pos[0] += reach * u0
+                    pos[1] += reach * u1
+                    pos[2] += reach * u2
                 elif half >= 2:
                     # exact: where the lattice walk first leaves the square of half-width `half`
-                    u = uniform(rs) * (t_start[half + 1] - t_start[half])
+                    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                    u *= t_start[half + 1] - t_start[half]
                     e = np.int64(u)
                     if u - e >= t_cut[t_start[half] + e]:
                         e = t_alias[t_start[half] + e]
                     e += t_start[half]
-                    for a in range(dim):
-                        pos[a] = q[a] + t_off[e, a]
+                    # a uniform symmetry of the square spreads the class over its orbit
+                    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                    o0, o1, o2 = _symmetry(np.int64(u * group), dim, t_off[e, 0], t_off[e, 1], t_off[e, 2])
+                    pos[0], pos[1], pos[2] = q[0] + o0, q[1] + o1, q[2] + o2
                 else:
                     # no particle within two sites: a plain step
-                    m = np.int64(uniform(rs) * moves.shape[0])
+                    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                    m = np.int64(u * nm)
                     for a in range(dim):
                         pos[a] = q[a] + moves[m, a]
                 if line:
                     for a in range(up):
                         pos[a] = pos[a] % period
+            rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
         if stuck:
             for a in range(dim):
                 points[count, a] = q[a]
@@ -636,7 +738,7 @@ def _grow(
                 words, start, blocks, cells, field = _rebuild(points, count, dim, width, off, period)
                 nb0, base1, nb1 = blocks[0], start[1], blocks[1]
             else:
-                _mark_images(words, dim, start, blocks, cells, field, width, off, q, period)
+                _mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim])
             while mi < len(marks) and marks[mi] <= count:
                 times[mi] = clock() - t0
                 mi += 1

@@ -39,7 +39,7 @@ def layout(dim, width):
 
 
 @jit
-def _index(dim, base, nb, i, j, k):
+def index(dim, base, nb, i, j, k):
     """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side."""
     if dim == 2:
         return base + (i >> 3) + nb * (j >> 3), (i & 7) | ((j & 7) << 3)
@@ -47,55 +47,37 @@ def _index(dim, base, nb, i, j, k):
 
 
 @jit
-def _locate(dim, start, blocks, s, i, j, k):
-    return _index(dim, start[s], blocks[s], i, j, k)
-
-
-@jit
-def bit(words, dim, base, nb, i, j, k):
-    """``test`` with the segment given by scalars (``start[s]``, ``blocks[s]``).
-
-    Hot loops call this: a call that passes fewer arrays does less atomic
-    reference counting when numba does not inline it.
-    """
-    w, b = _index(dim, base, nb, i, j, k)
+def test(words, dim, start, blocks, s, i, j, k):
+    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset)."""
+    w, b = index(dim, start[s], blocks[s], i, j, k)
     return (words[w] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
 
 
 @jit
-def test(words, dim, start, blocks, s, i, j, k):
-    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset)."""
-    return bit(words, dim, start[s], blocks[s], i, j, k)
-
-
-@jit
-def _set(words, dim, start, blocks, s, i, j, k):
-    w, b = _locate(dim, start, blocks, s, i, j, k)
-    words[w] |= np.uint64(1) << np.uint64(b)
-
-
-@jit
 def mark(words, dim, start, blocks, cells, i, j, k):
-    """Record a particle in cell (i, j, k): occupancy and every dilated level."""
-    _set(words, dim, start, blocks, 0, i, j, k)
-    for s in range(1, len(cells)):
-        w = cells[s]
+    """Record a particle in cell (i, j, k): occupancy and every dilated level.
+
+    A word of segment 0 is one cell of level 3 (2D) or 2 (3D): when it
+    already holds a particle, that particle marked the same cells on every
+    level from there up, so only the levels below are marked. Words are
+    indexed here with scalars (``index``): a helper call that passes the
+    arrays would cost atomic reference counting per cell.
+    """
+    w, b = index(dim, 0, blocks[0], i, j, k)
+    fresh = words[w] == np.uint64(0)
+    words[w] |= np.uint64(1) << np.uint64(b)
+    for s in range(1, len(cells) if fresh else min(len(cells), 4 if dim == 2 else 3)):
+        base, nb, n = start[s], blocks[s], cells[s]
         ci, cj, ck = i >> s, j >> s, k >> s
-        for di in range(-1, 2):
-            a = ci + di
-            if a < 0 or a >= w:
-                continue
-            for dj in range(-1, 2):
-                b = cj + dj
-                if b < 0 or b >= w:
-                    continue
+        for a in range(max(ci - 1, 0), min(ci + 1, n - 1) + 1):
+            for bb in range(max(cj - 1, 0), min(cj + 1, n - 1) + 1):
                 if dim == 2:
-                    _set(words, dim, start, blocks, s, a, b, 0)
+                    w, b = index(dim, base, nb, a, bb, 0)
+                    words[w] |= np.uint64(1) << np.uint64(b)
                     continue
-                for dk in range(-1, 2):
-                    c = ck + dk
-                    if 0 <= c < w:
-                        _set(words, dim, start, blocks, s, a, b, c)
+                for c in range(max(ck - 1, 0), min(ck + 1, n - 1) + 1):
+                    w, b = index(dim, base, nb, a, bb, c)
+                    words[w] |= np.uint64(1) << np.uint64(b)
 
 
 @jit
@@ -122,14 +104,21 @@ def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
         (i, j, k) to the nearest marked cell (0 when level is 0)
     """
     top = len(cells) - 1
-    s = min(max(guess, 1), top)
-    if test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
-        s -= 1
-        while s >= 1 and test(words, dim, start, blocks, s, i >> s, j >> s, k >> s):
-            s -= 1
-    else:
-        while s < top and not test(words, dim, start, blocks, s + 1, i >> (s + 1), j >> (s + 1), k >> (s + 1)):
-            s += 1
+    t = min(max(guess, 1), top)
+    step = 0  # +1 climbing while clear, -1 descending while set
+    s = 0
+    while 1 <= t <= top:
+        # the word is read here, not by a helper taking the array, which
+        # would cost atomic reference counting per level
+        w, b = index(dim, start[t], blocks[t], i >> t, j >> t, k >> t)
+        clear = (words[w] >> np.uint64(b)) & np.uint64(1) == np.uint64(0)
+        if step == 0:
+            step = 1 if clear else -1
+        if clear:
+            s = t
+        if clear == (step < 0):
+            break
+        t += step
     # one exit: numba then drops the reference counting of the arrays
     side = 1 << s
     mask = side - 1
@@ -170,10 +159,42 @@ def field_mark(field, dim, width, i, j, k, cap):
         for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
             dj = max(dk, abs(b - cj))
             row = fw * (b + fw * c)
+            # branchless, so that the compiler vectorises the row
             for a in range(max(ci - reach, 0), min(ci + reach, fw - 1) + 1):
-                d = max(dj, abs(a - ci))
-                if d < field[row + a]:
-                    field[row + a] = d
+                field[row + a] = min(field[row + a], np.uint8(max(dj, abs(a - ci))))
+
+
+@jit
+def field_fill(field, dim, width, cap):
+    """Fill in the field's distances from its zero cells (the rest at ``cap``).
+
+    Two raster passes, each taking the minimum over the half of the
+    3**dim - 1 neighbours already visited, give the exact Chebyshev distance;
+    a whole grid costs a few operations per cell instead of ``field_mark``'s
+    ``(2 cap - 1)**dim`` per particle, so a rebuild uses this.
+    """
+    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
+    nz = fw if dim == 3 else 1
+    for sweep in range(2):
+        g = 1 - 2 * sweep  # +1 forward, -1 backward
+        for cc in range(nz):
+            c = cc if g > 0 else nz - 1 - cc
+            for bb in range(fw):
+                b = bb if g > 0 else fw - 1 - bb
+                for aa in range(fw):
+                    a = aa if g > 0 else fw - 1 - aa
+                    here = a + fw * (b + fw * c)
+                    v = np.int64(field[here])
+                    if v == 0:
+                        continue
+                    # neighbours (dc, db, da) before this cell in the pass's order
+                    for dc in range(-1 if dim == 3 else 0, 1):
+                        for db in range(-1, 2 if dc < 0 else 1):
+                            for da in range(-1, 2 if dc < 0 or db < 0 else 0):
+                                n0, n1, n2 = a + g * da, b + g * db, c + g * dc
+                                if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
+                                    v = min(v, np.int64(field[n0 + fw * (n1 + fw * n2)]) + 1)
+                    field[here] = min(v, cap)
 
 
 @jit
