@@ -48,12 +48,17 @@ def _lattice_contacts(dim, moore):
             yield np.array(d)
 
 
+def seed_count(params):
+    """Particles placed before growth starts."""
+    return {"point": 1, "block": 2 ** params["dim"], "line": 0}[params["seed_shape"]]
+
+
 def assert_lattice_connected(points, params):
     """Every particle is a neighbour of an earlier one (or of the substrate)."""
     dim = params["dim"]
     line = params["seed_shape"] == "line"
     period = params["size"]
-    seeds = {"point": 1, "block": 2**dim, "line": 0}[params["seed_shape"]]
+    seeds = seed_count(params)
     contacts = list(_lattice_contacts(dim, params["neighbours"] == 3**dim - 1))
     index = {}
     for i, p in enumerate(map(tuple, points)):
@@ -86,7 +91,7 @@ def _periodic_tree(points, params):
 def assert_offlattice_contacts(points, params, exact):
     """No overlaps; each particle rests on an earlier one at distance 1."""
     tree, pts = _periodic_tree(points, params)
-    seeds = {"point": 1, "block": 2 ** params["dim"], "line": 0}[params["seed_shape"]]
+    seeds = seed_count(params)
     dist, _ = tree.query(pts, k=2)
     assert dist[:, 1].min() >= 1 - 1e-9, f"overlap: closest pair at {dist[:, 1].min()}"
     if not exact:
@@ -101,6 +106,8 @@ def assert_offlattice_contacts(points, params, exact):
 def check_invariants(c):
     assert c.points.shape == (c.n, c.params["dim"])
     assert c.steps.shape == (c.n,) and (c.steps >= 0).all()
+    # particles beyond the seed were carried there by walks, and the walks are counted
+    assert c.n <= seed_count(c.params) or c.steps.sum() > 0
     if c.params["model"] == "lattice":
         assert c.points.dtype.kind == "i"
         assert_lattice_connected(c.points, c.params)

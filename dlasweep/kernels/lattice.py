@@ -538,6 +538,8 @@ def _grow(
                 words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
                 True, box_lo, box_hi, 0.0, 1,
             )
+            total += taken
+            pending += taken
             for a in range(3):
                 wpos[w, a] = q[a]
             if not stuck and _outside(q, dim, line, box_lo, box_hi):
