@@ -21,6 +21,7 @@ VARIANTS = {
     "block-3d": dict(seed_shape="block", dim=3),
     "sticky": dict(stickiness=0.3),
     "line": dict(seed_shape="line", size=40),
+    "narrow": dict(seed_shape="line", size=9),  # the neighbour list's radius exceeds half the period
     "plane": dict(seed_shape="line", size=16, dim=3),
     "line-box": dict(seed_shape="line", size=40, launch="box"),
     "box": dict(size=96),
