@@ -6,6 +6,8 @@ order; no I/O. Lengths are in lattice units (off-lattice: particle diameters).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._jit import inline, jit
@@ -182,7 +184,7 @@ def _grid_shape(high, origin, scale, radius):
 
 def _empty_bitmap(shape):
     """A zeroed bitmap for a grid of ``shape``, or None when it would exceed ``_BITMAP_CAP`` bits."""
-    rows, words = int(np.prod(shape[:-1].astype(object))), -(-int(shape[-1]) // 64)
+    rows, words = math.prod(int(n) for n in shape[:-1]), -(-int(shape[-1]) // 64)
     return np.zeros((rows, words), np.uint64) if rows * words * 64 <= _BITMAP_CAP else None
 
 
@@ -199,12 +201,8 @@ def _from_points(points, high, origin, scale, radius):
 
 def _halvings(scales):
     """Map each scale that is twice another to that one."""
-    parent = {}
-    for k, s in enumerate(scales):
-        half = np.flatnonzero(np.isclose(2 * scales, s, rtol=1e-9, atol=0.0))
-        if len(half):
-            parent[k] = int(half[0])
-    return parent
+    twice = np.isclose(2 * scales[None, :], scales[:, None], rtol=1e-9, atol=0.0)
+    return {int(k): int(np.argmax(twice[k])) for k in np.flatnonzero(twice.any(axis=1))}
 
 
 def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
@@ -270,10 +268,12 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     for k, m in parent.items():
         needed.setdefault(m, set()).update(2 * j % offsets for j in range(offsets))
         children.setdefault(m, []).append(k)
-    counts = np.empty(len(scales), np.int64)
+    # One box of a side >= extent, placed at the low corner, holds the whole
+    # set; a small cluster measured at a sweep's scales skips most of them.
+    counts = np.ones(len(scales), np.int64)
     # Depth first, so that only the bitmaps on the current chain of halvings
     # are held; None means "from the particles".
-    pending = [(k, None) for k in range(len(scales)) if k not in parent]
+    pending = [(k, None) for k in range(len(scales)) if k not in parent and scales[k] < extent]
     while pending:
         k, finer = pending.pop()
         kept, best = {}, None
@@ -292,7 +292,7 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
                 kept[j] = (bitmap, shape)
         counts[k] = best
         complete = needed.get(k, set()) <= set(kept)
-        pending += [(child, kept if complete else None) for child in children.get(k, [])]
+        pending += [(child, kept if complete else None) for child in children.get(k, []) if scales[child] < extent]
     return scales, counts
 
 

@@ -183,7 +183,7 @@ BIN = Path(sys.executable).parent
 SLOW_SPEC = """\
 name = "slow"
 [grid]
-n_particles = [1000, 10000]
+n_particles = [1000, 100000]
 seeds = 8
 [run]
 root_seed = 5
