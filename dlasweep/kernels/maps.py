@@ -149,9 +149,16 @@ def field_mark(field, dim, width, i, j, k, cap):
     """
     fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
     ci, cj, ck = i >> FIELD_SHIFT, j >> FIELD_SHIFT, (k >> FIELD_SHIFT if dim == 3 else 0)
-    here = ci + fw * (cj + fw * ck)
-    if field[here] == 0:
-        return
+    if field[ci + fw * (cj + fw * ck)] != 0:
+        field_lower(field, dim, fw, cap, ci, cj, ck)
+
+
+@jit
+def field_lower(field, dim, fw, cap, ci, cj, ck):
+    """Lower the distances within ``cap`` about a particle in coarse cell (ci, cj, ck).
+
+    ``fw`` is the field's side in coarse cells.
+    """
     reach = cap - 1
     klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
     for c in range(klo, khi + 1):

@@ -98,8 +98,8 @@ GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 LINE_PAD = 32
 """Periodic images are marked in the maps up to this distance (line seed)."""
-FS = 2
-"""The distance field's coarse cells have side 2**FS."""
+FS = maps.FIELD_SHIFT
+"""The distance field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
 FCAP = (16, 4)
 """Cap of the distance field (coarse cells), 2D and 3D; beyond it the maps
 bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap."""
@@ -213,7 +213,7 @@ def _mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
                 fresh = field[ci + fw * (cj + fw * ck)] != 0
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
                 if fresh:
-                    _mark_field(field, dim, fw, gi[17], ci, cj, ck)
+                    maps.field_lower(field, dim, fw, gi[17], ci, cj, ck)
 
 
 @jit
@@ -244,26 +244,6 @@ def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
                 for a in range(max(ci - 1, 0), min(ci + 1, w - 1) + 1):
                     q = start[s] + (a >> bs) + nb * ((b >> bs) + nb * (c >> bs))
                     words[q] |= np.uint64(1) << np.uint64((a & bm) | ((b & bm) << bs) | ((c & bm) << (2 * bs)))
-
-
-@jit
-def _mark_field(field, dim, fw, cap, ci, cj, ck):
-    """Lower the field about a particle in coarse cell (ci, cj, ck).
-
-    ``field[c]`` is the Chebyshev distance, in coarse cells of side
-    ``2**FS`` and capped at ``cap``, from coarse cell c to the nearest coarse
-    cell holding a particle centre. Near the cluster, where most jumps are,
-    it bounds the free distance more sharply than the dilated maps.
-    """
-    r = cap - 1
-    klo, khi = (max(ck - r, 0), min(ck + r, fw - 1)) if dim == 3 else (0, 0)
-    for c in range(klo, khi + 1):
-        dk = abs(c - ck)
-        for b in range(max(cj - r, 0), min(cj + r, fw - 1) + 1):
-            dj = max(dk, abs(b - cj))
-            row = fw * (b + fw * c)
-            for a in range(max(ci - r, 0), min(ci + r, fw - 1) + 1):
-                field[row + a] = min(field[row + a], max(dj, abs(a - ci)))
 
 
 @jit
@@ -359,14 +339,17 @@ def _span(v, r, nc, periodic, origin, inv):
     return max(lo, 0), min(hi, nc - 1)
 
 
-@jit
+@inline
 def _gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     """Particles with centres within r of point c, as the images nearest c.
 
-    Fills lx, ly, lz (coordinates) and li (indices); returns the count.
+    Fills lx, ly, lz (coordinates) and li (indices); returns the count and
+    the smallest squared centre distance among them (inf when none). Inlined,
+    so that the walk's hot loop pays no reference counting for its arrays.
     """
     r2 = r * r
     nl = 0
+    near2 = INF
     lo0, hi0 = _span(c[0], r, gi[0], gi[10] == 1, gf[0], gf[3])
     lo1, hi1 = _span(c[1], r, gi[1], gi[11] == 1, gf[1], gf[4])
     lo2, hi2 = 0, 0
@@ -401,14 +384,16 @@ def _gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
                             d1 -= size
                         elif d1 < -half:
                             d1 += size
-                    if d0 * d0 + d1 * d1 + d2 * d2 < r2 and nl < len(lx):
+                    q = d0 * d0 + d1 * d1 + d2 * d2
+                    if q < r2 and nl < len(lx):
                         lx[nl] = c[0] + d0
                         ly[nl] = c[1] + d1
                         lz[nl] = c[2] + d2
                         li[nl] = h
                         nl += 1
+                        near2 = min(near2, q)
                     h = nxt[h]
-    return nl
+    return nl, near2
 
 
 @jit
@@ -485,7 +470,7 @@ def _cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, 
         left -= piece
         for a in range(3):
             c[a] = w[a] + 0.5 * piece * u[a]
-        nl = _gather(c, 0.5 * piece + 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+        nl = _gather(c, 0.5 * piece + 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
         t, hit = _ray(w, u, piece, nl, lx, ly, lz, line, dim)
         if hit != -1:
             _settle(w, u, t, hit, dim, lx, ly, lz, normal)
@@ -514,7 +499,7 @@ def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, w
         for a in range(dim):
             w[a] = e[a]
         return False
-    nov = _gather(e, 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+    nov = _gather(e, 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
     if nov == 0 and not sub:
         for a in range(dim):
             w[a] = e[a]
@@ -532,7 +517,7 @@ def _gauss_move(w, sigma, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, w
         for a in range(3):
             p[a] = w[a]
         _settle(p, u, t, hit, dim, lx, ly, lz, normal)
-        if _gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li) == 0:
+        if _gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0] == 0:
             for a in range(3):
                 w[a] = p[a]
             return True
@@ -586,12 +571,6 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
     W = float(gi[9])
     m0, m1, m2 = float(gi[6]), float(gi[7]), float(gi[8])
     per = gi[10] == 1
-    # cell-list geometry
-    per1 = gi[11] == 1
-    n0, n1, n2, t0, t1 = gi[0], gi[1], gi[2], gi[3], gi[4]
-    tb = gi[13]
-    tm = (1 << tb) - 1
-    o0, o1, o2, v0, v1, v2 = gf[0], gf[1], gf[2], gf[3], gf[4], gf[5]
     ftop = min(len(cells) - 1, gi[15]) + 1
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
@@ -748,62 +727,12 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                 elif dm < 0.0:
                     g = ggeo
                 else:
-                    # the neighbour list around w (as _gather, spelled out: a call
-                    # here costs more than the scan) and the nearest distance
+                    # the neighbour list around w, and the nearest distance
                     anchor[0] = w[0]
                     anchor[1] = w[1]
                     anchor[2] = w[2]
                     list_ok = True
-                    nl = 0
-                    dl2 = INF
-                    lo0 = int(np.floor((w[0] - RL - o0) * v0))
-                    hi0 = int(np.floor((w[0] + RL - o0) * v0))
-                    lo1 = int(np.floor((w[1] - RL - o1) * v1))
-                    hi1 = int(np.floor((w[1] + RL - o1) * v1))
-                    lo2, hi2 = 0, 0
-                    if dim == 3:
-                        lo2 = max(int(np.floor((w[2] - RL - o2) * v2)), 0)
-                        hi2 = min(int(np.floor((w[2] + RL - o2) * v2)), n2 - 1)
-                    if per:
-                        hi0 = min(hi0, lo0 + n0 - 1)
-                    else:
-                        lo0, hi0 = max(lo0, 0), min(hi0, n0 - 1)
-                    if per1:
-                        hi1 = min(hi1, lo1 + n1 - 1)
-                    else:
-                        lo1, hi1 = max(lo1, 0), min(hi1, n1 - 1)
-                    for k2 in range(lo2, hi2 + 1):
-                        for k1 in range(lo1, hi1 + 1):
-                            c1 = k1 % n1 if per1 else k1
-                            for k0 in range(lo0, hi0 + 1):
-                                c0 = k0 % n0 if per else k0
-                                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))]
-                                if tile < 0:
-                                    continue
-                                h = heads[tile * 64 + ((c0 & tm) | ((c1 & tm) << tb) | ((k2 & tm) << (2 * tb)))]
-                                while h >= 0:
-                                    d0 = pts[h, 0] - w[0]
-                                    d1 = pts[h, 1] - w[1]
-                                    d2 = pts[h, 2] - w[2] if dim == 3 else 0.0
-                                    if per:
-                                        if d0 > hb:
-                                            d0 -= size
-                                        elif d0 < -hb:
-                                            d0 += size
-                                    if per1:
-                                        if d1 > hb:
-                                            d1 -= size
-                                        elif d1 < -hb:
-                                            d1 += size
-                                    q = d0 * d0 + d1 * d1 + d2 * d2
-                                    if q < RL2 and nl < LCAP:
-                                        lx[nl] = w[0] + d0
-                                        ly[nl] = w[1] + d1
-                                        lz[nl] = w[2] + d2
-                                        li[nl] = h
-                                        nl += 1
-                                        dl2 = min(dl2, q)
-                                    h = nxt[h]
+                    nl, dl2 = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
                     g = (np.sqrt(dl2) if dl2 < RL2 else RL) - 1.0
             if line:
                 g = min(g, w[up])
@@ -827,7 +756,7 @@ def _walk(w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nx
                     anchor[0] = w[0]
                     anchor[1] = w[1]
                     anchor[2] = w[2]
-                    nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+                    nl = _gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
                     list_ok = True
                 s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 total += 1
@@ -1059,7 +988,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
                     pos[k, a] = rng.random() * size
                 else:
                     pos[k, a] = (2.0 * rng.random() - 1.0) * hb
-            if _gather(pos[k], 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi) == 0:
+            if _gather(pos[k], 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi)[0] == 0:
                 break
     live = nwalk
     total = np.int64(0)
@@ -1078,7 +1007,7 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
             for a in range(3):
                 w[a] = pos[k, a]
             dm = _map_dist(w, dim, size, gi, words, start, blocks, cells, field)
-            if dm == 0.0 and _gather(w, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi) > 0:
+            if dm == 0.0 and _gather(w, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi)[0] > 0:
                 alive[k] = False  # a particle attached on top of it: merged
                 live -= 1
                 continue
