@@ -10,13 +10,13 @@ __version__ = "0.1.0"
 
 from .grow import Cluster, grow
 from .measure import box_counts, radius_of_gyration
-from .fit import fit_dimension
+from .fit import fit_dimension, fit_mass_radius
 from .spec import load_spec
 from .report import report
 
 # dask and xarray load on first use, so that growing a cluster (a benchmark
 # probe, a worker) carries neither
-_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store"}
+_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "summarise": "analysis"}
 
 
 def __getattr__(name):
@@ -31,6 +31,8 @@ __all__ = [
     "box_counts",
     "radius_of_gyration",
     "fit_dimension",
+    "fit_mass_radius",
+    "summarise",
     "load_spec",
     "run_sweep",
     "open_sweep",

@@ -1,11 +1,20 @@
 """Fractal dimension from box counts and from mass-radius growth, and ensemble statistics.
 
-Both fits pick their scaling range from the data: the longest window, within
-limits set by the particle size and the cluster extent, whose points lie on a
-straight line in log-log. A window is straight when the slope of a quadratic
-fitted to it changes by at most ``max_drift`` across the window and the
-line's RMS residual is at most ``max_rms``. A fit that cannot be trusted says
-so (``ok=False`` and a reason) instead of returning a confident number.
+Both fits read the local slope along the curve: the least-squares slope over
+each octave of the variable (box side, or particle count). A window of the
+curve is *flat* when the change of the local slope across it, from a line
+fitted to the local slopes, is at most twice its own standard error plus
+``flat_tolerance``. The standard error counts one independent local slope per
+octave, since slopes over overlapping octaves share their points.
+
+D is the least-squares slope over the widest flat window of at least
+``min_decades``. Its ``stderr`` adds in quadrature a statistical part (the
+larger of the regression error and the scatter of the local slopes divided by
+the square root of the octaves) and a systematic part (half the change of the
+local slope across the window, the most by which the window's choice can
+move the slope). Log-periodic wiggles of lacunar sets enter as scatter, a
+bend as change; a fit with no flat window says so (``ok=False`` and a
+reason) instead of returning a confident number.
 """
 
 from __future__ import annotations
@@ -13,6 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+Z95 = 1.959963984540054
+"""Two-sided 95% quantile of the standard normal: every interval here is a 95% CI."""
+
+_OCTAVE = np.log(2.0)
 
 
 @dataclass(frozen=True)
@@ -24,24 +38,29 @@ class Fit:
     D : float
         The dimension (NaN when no line could be fitted at all).
     stderr : float
-        Standard error of the slope from the regression residuals. Points of
-        one curve are correlated, so this measures the fit, not the spread
-        over seeds (see ``ensemble`` for that).
-    lo, hi : float
-        Range of the abscissa used (box sides, or particle counts).
+        Standard error, statistical and systematic (module docstring).
+    ci_lo, ci_hi : float
+        95% confidence interval, ``D -+ 1.96 stderr``.
+    range_lo, range_hi : float
+        The fitted window of the abscissa (box sides, or particle counts).
     npoints : int
         Points in the fitted window.
+    drift : float
+        Change of the local slope across the window (signed: up is positive).
     ok : bool
-        Whether the fit can be trusted.
+        Whether the fit can be trusted: a flat window of ``min_decades``.
     reason : str
         Why not, when ``ok`` is False; empty otherwise.
     """
 
     D: float
     stderr: float
-    lo: float
-    hi: float
+    ci_lo: float
+    ci_hi: float
+    range_lo: float
+    range_hi: float
     npoints: int
+    drift: float
     ok: bool
     reason: str = ""
 
@@ -57,7 +76,7 @@ class Ensemble:
     stderr : float
         ``std / sqrt(n)``.
     ci_lo, ci_hi : float
-        Percentile bootstrap confidence interval of the mean.
+        Percentile bootstrap 95% confidence interval of the mean.
     n : int
         Number of finite values used.
     """
@@ -70,61 +89,103 @@ class Ensemble:
     n: int
 
 
-def _line(x, y):
-    """Least-squares slope, its standard error, and the RMS residual."""
-    xm = x - x.mean()
-    sxx = (xm * xm).sum()
-    slope = (xm * (y - y.mean())).sum() / sxx
-    residual = y - y.mean() - slope * xm
-    rms = np.sqrt((residual**2).mean())
-    stderr = np.sqrt((residual**2).sum() / (len(x) - 2) / sxx) if len(x) > 2 else np.nan
-    return slope, stderr, rms
+def _line(u, v):
+    """Least-squares slope of v on u and its standard error from the residuals."""
+    um = u - u.mean()
+    sxx = um @ um
+    slope = um @ (v - v.mean()) / sxx
+    residual = v - v.mean() - slope * um
+    stderr = np.sqrt(residual @ residual / (len(u) - 2) / sxx) if len(u) > 2 else np.nan
+    return slope, stderr
 
 
-def _slope_drift(x, y):
-    """Change of the local slope across the window, from a quadratic fit."""
-    curvature = np.polyfit(x - x.mean(), y, 2)[0]
-    return abs(2 * curvature * (x[-1] - x[0]))
+def local_slopes(x, y, u):
+    """Slope of y on x over each complete octave of u: start and end (exclusive) indices, slopes, centres."""
+    ends = np.searchsorted(u, u + _OCTAVE * (1 + 1e-9), side="right")
+    # An octave is complete when its points reach (nearly: counts are whole
+    # numbers) a factor two; the last points of the curve start none.
+    starts = np.flatnonzero((ends - np.arange(len(u)) >= 2) & (u[ends - 1] - u >= 0.95 * _OCTAVE))
+    ends = ends[starts]
+    slopes = np.array([_line(x[a:b], y[a:b])[0] for a, b in zip(starts, ends)])
+    centres = np.array([u[a:b].mean() for a, b in zip(starts, ends)])
+    return starts, ends, slopes, centres
 
 
-def _straight_fit(x, y, variable, sign, *, min_span, min_points, max_drift, max_rms, unit):
-    """Fit ``sign * slope`` on the longest straight window of (x, y).
+@dataclass(frozen=True)
+class _Window:
+    a: int
+    b: int
+    D: float
+    stat: float
+    drift: float
+    drift_err: float
+    flat: bool
+
+    @property
+    def stderr(self):
+        return float(np.hypot(self.stat, self.drift / 2))
+
+
+def _window(x, y, u, sign, local, a, b, tolerance):
+    """The fit over points a..b-1 and the flatness of its local slopes."""
+    slope, regression = _line(x[a:b], y[a:b])
+    starts, ends, slopes, centres = local
+    inside = (starts >= a) & (ends <= b)
+    d, c = sign * slopes[inside], centres[inside]
+    span = u[b - 1] - u[a]
+    octaves = (c[-1] - c[0]) / _OCTAVE + 1 if len(c) else 0.0
+    if len(d) < 2 or octaves < 2:
+        return _Window(a, b, float(sign * slope), np.nan, np.nan, np.nan, False)
+    trend, _ = _line(c, d) if c[-1] > c[0] else (0.0, np.nan)
+    residual = d - d.mean() - trend * (c - c.mean())
+    scatter = np.sqrt(residual @ residual / max(len(d) - 2, 1))
+    # Slopes over overlapping octaves share points: count one per octave.
+    trend_err = scatter * np.sqrt(len(d) / octaves / ((c - c.mean()) @ (c - c.mean())))
+    drift, drift_err = trend * span, trend_err * span
+    stat = max(np.nan_to_num(regression), scatter / np.sqrt(octaves))
+    flat = abs(drift) <= 2 * drift_err + tolerance
+    return _Window(a, b, float(sign * slope), float(stat), float(drift), float(drift_err), bool(flat))
+
+
+def _scaling_fit(x, y, variable, sign, *, min_decades, min_points, flat_tolerance, unit):
+    """Fit ``sign * slope`` of y on x over the widest flat window (module docstring).
 
     ``variable`` (increasing, named ``unit`` in reasons) is the quantity whose
-    decades the window must cover (``min_span`` of them) and whose range the
-    fit reports; the arrays are already restricted to the admissible range.
+    octaves define the local slopes and whose decades the window must span;
+    the arrays are already restricted to the admissible range.
     """
-    span = np.log10(variable)
     m = len(x)
+
+    def result(w, ok, reason=""):
+        stderr = w.stderr
+        return Fit(w.D, stderr, w.D - Z95 * stderr, w.D + Z95 * stderr, float(variable[w.a]),
+                   float(variable[w.b - 1]), w.b - w.a, w.drift, ok, reason)
+
     if m < max(min_points, 3):
-        return Fit(np.nan, np.nan, np.nan, np.nan, m, False, f"{m} admissible points, need {min_points}")
-
-    def result(a, b, ok, reason=""):
-        slope, stderr, _ = _line(x[a:b], y[a:b])
-        return Fit(float(sign * slope), float(stderr), float(variable[a]), float(variable[b - 1]), b - a, ok, reason)
-
-    full_span = span[-1] - span[0]
-    if full_span < min_span:
-        return result(0, m, False, f"admissible range spans {full_span:.2f} decades of {unit}, need {min_span:g}")
-    # Longest first; among equally long straight windows the best line wins.
-    for length in range(m, min_points - 1, -1):
-        straight = []
-        for a in range(m - length + 1):
-            b = a + length
-            if span[b - 1] - span[a] < min_span:
-                continue
-            rms = _line(x[a:b], y[a:b])[2]
-            if rms <= max_rms and _slope_drift(x[a:b], y[a:b]) <= max_drift:
-                straight.append((rms, a, b))
-        if straight:
-            _, a, b = min(straight)
-            return result(a, b, True)
-    drift = _slope_drift(x, y)
-    rms = _line(x, y)[2]
-    return result(
-        0, m, False,
-        f"no window of {min_span:g} decades is straight (whole range: slope drifts {drift:.2f}, RMS residual {rms:.3f})",
-    )
+        nan = np.nan
+        return Fit(nan, nan, nan, nan, nan, nan, m, nan, False, f"{m} admissible points, need {max(min_points, 3)}")
+    u = np.log(variable)
+    decades = (u - u[0]) / np.log(10)
+    local = local_slopes(x, y, u)
+    whole = _window(x, y, u, sign, local, 0, m, flat_tolerance)
+    if decades[-1] < min_decades:
+        return result(whole, False, f"admissible range spans {decades[-1]:.2f} decades of {unit}, need {min_decades:g}")
+    # Widest first; among equally wide flat windows the most precise wins.
+    windows = [(a, b) for a in range(m) for b in range(a + min_points, m + 1)
+               if (u[b - 1] - u[a]) / np.log(10) >= min_decades]
+    windows.sort(key=lambda w: -(u[w[1] - 1] - u[w[0]]))
+    best, width = None, None
+    for a, b in windows:
+        if width is not None and u[b - 1] - u[a] < width - 1e-12:
+            break
+        w = _window(x, y, u, sign, local, a, b, flat_tolerance)
+        if w.flat and (best is None or w.stderr < best.stderr):
+            best, width = w, u[b - 1] - u[a]
+    if best is not None:
+        return result(best, True)
+    return result(whole, False, (
+        f"local slope not flat over any {min_decades:g} decades of {unit}: across the whole range it "
+        f"changes by {whole.drift:+.3f} (standard error {whole.drift_err:.3f})"))
 
 
 def fit_dimension(
@@ -134,32 +195,31 @@ def fit_dimension(
     min_scale: float = 2.0,
     max_fraction: float = 0.25,
     min_decades: float = 1.0,
-    min_points: int = 6,
-    max_drift: float = 0.25,
-    max_rms: float = 0.05,
+    min_points: int = 4,
+    flat_tolerance: float = 0.02,
 ) -> Fit:
-    """Box-counting dimension: D = -d log N / d log s over a straight range.
+    """Box-counting dimension: D = -d log N / d log s over the widest flat window.
 
-    Admissible scales run from ``min_scale`` particle sizes (below, the
+    Admissible sides run from ``min_scale`` particle sizes (below, the
     particle shape dominates) to ``max_fraction`` of the set's extent, taken
-    as the smallest scale whose count is 1 (the largest scale given when none
-    is); near the extent the counts saturate. Within that range the longest
-    straight window of at least ``min_decades`` and ``min_points`` points is
-    fitted by least squares (see the module docstring).
+    as the smallest side whose count is 1 (the largest side given when none
+    is); near the extent the counts saturate. Within that range the widest
+    window of at least ``min_decades`` and ``min_points`` points whose local
+    slope is flat is fitted by least squares (module docstring).
 
     Parameters
     ----------
     scales, counts : array_like
         Output of ``box_counts``.
-    min_scale, max_fraction, min_decades, min_points, max_drift, max_rms
-        The range and straightness rules above (drift and RMS in natural log).
+    min_scale, max_fraction, min_decades, min_points, flat_tolerance
+        The range and flatness rules above.
 
     Returns
     -------
     Fit
-        ``lo``/``hi`` in box sides. ``ok`` is False, with a reason, for less
-        than ``min_decades`` of admissible scales, fewer than ``min_points``
-        points, or no straight window.
+        ``range_lo``/``range_hi`` in box sides. ``ok`` is False, with a
+        reason, for less than ``min_decades`` of admissible sides, too few
+        points, or no flat window.
     """
     s = np.asarray(scales, dtype=np.float64).ravel()
     n = np.asarray(counts, dtype=np.float64).ravel()
@@ -170,79 +230,89 @@ def fit_dimension(
     single = np.flatnonzero(n <= 1)
     extent = s[single[0]] if len(single) else s[-1]
     keep = (s >= min_scale) & (s <= max_fraction * extent) & (n > 0)
-    x = np.log(s[keep])
-    return _straight_fit(
-        x, np.log(n[keep]), s[keep], -1.0,
-        min_span=min_decades, min_points=min_points, max_drift=max_drift, max_rms=max_rms, unit="box side",
-    )
+    return _scaling_fit(np.log(s[keep]), np.log(n[keep]), s[keep], -1.0, min_decades=min_decades,
+                        min_points=min_points, flat_tolerance=flat_tolerance, unit="box side")
+
+
+def mass_radius_counts(n_max: int, *, start_fraction: float = 0.05, min_count: int = 50,
+                       per_octave: int = 8) -> np.ndarray:
+    """Particle counts at which a growth history is sampled for ``fit_mass_radius``.
+
+    Geometrically spaced, ``per_octave`` per factor two, from the end of the
+    transient, ``max(start_fraction * n_max, min_count)``, to ``n_max``: early
+    on a cluster is a compact blob, not a fractal, and evenly spaced counts
+    would let the many late prefixes outweigh the early ones.
+
+    Returns
+    -------
+    ndarray of int64
+        Increasing; empty when ``n_max`` does not exceed the transient.
+    """
+    lo = max(start_fraction * n_max, float(min_count))
+    if n_max <= lo:
+        return np.zeros(0, np.int64)
+    targets = lo * 2.0 ** (np.arange(int(per_octave * np.log2(n_max / lo)) + 1) / per_octave)
+    return np.unique(np.r_[np.round(targets[targets < n_max]), n_max].astype(np.int64))
 
 
 def fit_mass_radius(
-    n,
     rg,
+    n=None,
     *,
     start_fraction: float = 0.05,
     min_count: int = 50,
     per_octave: int = 8,
     min_decades: float = 1.0,
     min_points: int = 6,
-    max_drift: float = 0.25,
-    max_rms: float = 0.05,
+    flat_tolerance: float = 0.02,
 ) -> Fit:
-    """Mass-radius dimension from the growth history: N ~ Rg**D.
+    """Mass-radius dimension from a growth history: N ~ Rg**D.
 
-    The transient is cut at ``max(start_fraction * N_max, min_count)``
-    particles: early on the cluster is a lattice blob, not a fractal. The
-    history above that is sampled at ``per_octave`` geometrically spaced
-    counts (so the many late prefixes do not outweigh the early ones) and the
-    longest straight window of at least ``min_decades`` decades of N is
-    fitted: D is the slope of log N against log Rg.
+    The history is sampled at ``mass_radius_counts`` (the transient left
+    out) and D, the slope of log N against log Rg, is fitted over the widest
+    flat window of at least ``min_decades`` decades of N (module docstring).
 
     Parameters
     ----------
-    n : array_like of int
-        Particle counts, increasing; for the Rg of every prefix,
-        ``np.arange(1, len(rg) + 1)``.
     rg : array_like
-        Radius of gyration at each count.
-    start_fraction, min_count, per_octave, min_decades, min_points, max_drift, max_rms
-        The range, sampling and straightness rules above.
+        Radius of gyration at each count; by default of every prefix, as
+        ``radius_of_gyration`` gives it.
+    n : array_like of int, optional
+        The counts of ``rg``, increasing (default ``1, 2, ..., len(rg)``).
+    start_fraction, min_count, per_octave, min_decades, min_points, flat_tolerance
+        The sampling, range and flatness rules above.
 
     Returns
     -------
     Fit
-        ``lo``/``hi`` in particles. The growth history is one correlated
-        realisation, so ``stderr`` understates the seed-to-seed spread.
+        ``range_lo``/``range_hi`` in particles. One growth history is one
+        correlated realisation: its ``stderr`` is that of this cluster's
+        curve, and the spread over seeds is the ensemble's business
+        (``dlasweep.summarise``).
     """
-    n = np.asarray(n, dtype=np.float64).ravel()
     rg = np.asarray(rg, dtype=np.float64).ravel()
+    n = np.arange(1, len(rg) + 1, dtype=np.float64) if n is None else np.asarray(n, dtype=np.float64).ravel()
     if n.shape != rg.shape:
         raise ValueError(f"n and rg differ in length: {len(n)} and {len(rg)}")
     if len(n) == 0:
-        return Fit(np.nan, np.nan, np.nan, np.nan, 0, False, "no data")
-    lo = max(start_fraction * n[-1], float(min_count))
-    if n[-1] <= lo:
-        targets = np.empty(0)
-    else:
-        targets = lo * 2.0 ** (np.arange(int(per_octave * np.log2(n[-1] / lo)) + 1) / per_octave)
-        targets = np.r_[targets[targets < n[-1]], n[-1]]
+        nan = np.nan
+        return Fit(nan, nan, nan, nan, nan, nan, 0, nan, False, "no data")
+    targets = mass_radius_counts(int(n[-1]), start_fraction=start_fraction, min_count=min_count,
+                                 per_octave=per_octave)
     picks = np.unique(np.clip(np.searchsorted(n, targets), 0, len(n) - 1))
-    picks = picks[(n[picks] >= lo) & (rg[picks] > 0)]
-    return _straight_fit(
-        np.log(rg[picks]), np.log(n[picks]), n[picks], 1.0,
-        min_span=min_decades, min_points=min_points, max_drift=max_drift, max_rms=max_rms, unit="N",
-    )
+    picks = picks[rg[picks] > 0]
+    return _scaling_fit(np.log(rg[picks]), np.log(n[picks]), n[picks], 1.0, min_decades=min_decades,
+                        min_points=min_points, flat_tolerance=flat_tolerance, unit="N")
 
 
-def ensemble(values, *, confidence: float = 0.95, resamples: int = 4000, seed: int = 0) -> Ensemble:
-    """Mean, spread and bootstrap confidence interval of values over seeds.
+def ensemble(values, *, resamples: int = 4000, seed: int = 0) -> Ensemble:
+    """Mean, spread and bootstrap 95% confidence interval of values over seeds.
 
     Parameters
     ----------
     values : array_like
-        One value per seed; NaN (failed fits) are dropped.
-    confidence : float
-        Coverage of the percentile bootstrap interval of the mean.
+        One value per seed; NaN entries are dropped (say so where it matters:
+        dropping values selects).
     resamples : int
         Bootstrap resamples, drawn from ``numpy.random.default_rng(seed)`` so
         that reruns agree.
@@ -261,6 +331,5 @@ def ensemble(values, *, confidence: float = 0.95, resamples: int = 4000, seed: i
         return Ensemble(float(v[0]), np.nan, np.nan, np.nan, np.nan, 1)
     std = float(v.std(ddof=1))
     means = v[np.random.default_rng(seed).integers(0, k, (resamples, k))].mean(axis=1)
-    tail = 100 * (1 - confidence) / 2
-    ci_lo, ci_hi = np.percentile(means, [tail, 100 - tail])
+    ci_lo, ci_hi = np.percentile(means, [2.5, 97.5])
     return Ensemble(float(v.mean()), std, std / np.sqrt(k), float(ci_lo), float(ci_hi), k)

@@ -1,0 +1,331 @@
+"""Ensemble analysis of a sweep: every number the report quotes, as one xarray Dataset.
+
+The headline D of a configuration at a count N is the ensemble mass-radius
+estimate: the seed-averaged radius of gyration <Rg>(n) over the growth
+histories of every cluster that reached N, fitted as n ~ <Rg>**D over the
+widest flat window between the end of the transient (5% of N) and N
+(``fit.fit_mass_radius``). Its 95% CI is a percentile bootstrap over seeds
+with the window held fixed. Every cluster that reached N enters; none is
+dropped for its own fit.
+
+Beside it: the local slope D_eff(n) of the same ensemble curve over each
+octave of n with its bootstrap band; D_inf, the extrapolation
+D_eff(n) = D_inf + a n**-w over independent octaves, given only where that
+model describes the data; and the box-counting D (the mean over every
+cluster of its own fit), a finite-cluster estimate that reads low.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .fit import ensemble, fit_dimension, fit_mass_radius, mass_radius_counts
+from .measure import radius_of_gyration
+from .params import STATUSES
+
+HISTORY_START = 50
+"""Smallest count on the local-slope curve: below, a cluster is a compact blob."""
+LOCAL_PER_OCTAVE = 8
+"""Counts per octave on the local-slope curve."""
+RESAMPLES = 1000
+"""Bootstrap resamples over seeds, from ``numpy.random.default_rng(0)`` so that reruns agree."""
+EXPONENTS = (0.25, 0.5, 0.75, 1.0)
+"""Correction exponents w tried for D_eff(n) = D_inf + a n**-w."""
+MAX_CHI2 = 2.0
+"""Largest chi-square per degree of freedom at which the correction model describes D_eff."""
+MAX_INF_HALF_WIDTH = 0.05
+"""Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
+MIN_OCTAVES = 4
+"""Fewest independent octaves of D_eff an extrapolation needs."""
+
+_ATTRS = {
+    "D": "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window",
+    "D_ci_lo": "lower end of the 95% CI of D (bootstrap over seeds, window fixed)",
+    "D_ci_hi": "upper end of the 95% CI of D (bootstrap over seeds, window fixed)",
+    "D_range_lo": "smallest particle count of the fitted window",
+    "D_range_hi": "largest particle count of the fitted window",
+    "D_drift": "change of the local slope of the ensemble curve across the fitted window",
+    "D_ok": "the ensemble curve has a flat window of a decade (1) or not (0)",
+    "D_reason": "why D_ok is 0; empty otherwise",
+    "D_seeds": "clusters that reached N and enter D",
+    "D_seed_std": "standard deviation over seeds of the per-cluster mass-radius D",
+    "D_box": "box-counting D, mean of the per-cluster fits of every cluster that reached N (reads low)",
+    "D_box_ci_lo": "lower end of the bootstrap 95% CI of D_box",
+    "D_box_ci_hi": "upper end of the bootstrap 95% CI of D_box",
+    "D_box_ok_fraction": "fraction of those clusters whose own box-counting fit is flat",
+    "D_cluster": "mass-radius D of one cluster's own growth history up to N",
+    "D_cluster_ok": "whether that cluster's fit is flat (1) or not (0)",
+    "D_box_cluster": "box-counting D of one cluster at N",
+    "D_box_cluster_ok": "whether that fit is flat (1) or not (0)",
+    "D_local": "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve",
+    "D_local_ci_lo": "lower end of the bootstrap 95% band of D_local",
+    "D_local_ci_hi": "upper end of the bootstrap 95% band of D_local",
+    "D_inf": "D extrapolated to infinite N: D_eff(n) = D_inf + a n**-w over independent octaves",
+    "D_inf_ci_lo": "lower end of the bootstrap 95% CI of D_inf",
+    "D_inf_ci_hi": "upper end of the bootstrap 95% CI of D_inf",
+    "D_inf_exponent": "correction exponent w of the extrapolation",
+    "D_inf_range_lo": "smallest count of the octaves the extrapolation uses",
+    "D_inf_reason": "why D_inf is not given; empty otherwise",
+    "rg_mean": "mean radius of gyration over the seeds that reached N",
+    "rg_ci_lo": "lower end of the bootstrap 95% CI of rg_mean",
+    "rg_ci_hi": "upper end of the bootstrap 95% CI of rg_mean",
+    "rg_over_rmax": "mean of Rg / R_max over the seeds that reached N",
+    "rg_over_rmax_ci_lo": "lower end of the bootstrap 95% CI of rg_over_rmax",
+    "rg_over_rmax_ci_hi": "upper end of the bootstrap 95% CI of rg_over_rmax",
+    "seconds_per_particle": "mean wall time per particle to grow to N",
+    "steps_per_particle": "mean walk steps per particle to grow to N",
+    "status_count": "clusters with each growth status at N",
+}
+
+
+def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
+    """Headline D, its 95% CI, local slopes, D_inf and box-counting D of every configuration.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep, as from ``run_sweep`` or ``open_sweep``.
+    resamples : int
+        Bootstrap resamples over seeds.
+
+    Returns
+    -------
+    xarray.Dataset
+        On the sweep's configuration dims (swept parameters, ``size``) and
+        ``n_particles``; per-cluster fits also on ``seed``; the local slopes
+        on ``n_local`` (the geometric centre of each octave); D_inf per
+        configuration. Every variable has a ``long_name``; the module
+        docstring says how each is estimated.
+    """
+    sweep = _Sweep(ds)
+    out = {name: np.full(sweep.shape + shape, np.nan) for name, shape in sweep.layout.items()}
+    out["D_reason"] = np.full(sweep.shape + (sweep.n_counts,), "", object)
+    out["D_inf_reason"] = np.full(sweep.shape, "", object)
+    for config in np.ndindex(*sweep.shape):
+        _config(sweep, config, out, resamples)
+    return sweep.dataset(out)
+
+
+class _Sweep:
+    """The parts of a sweep dataset that the analysis reads, indexed by configuration."""
+
+    def __init__(self, ds):
+        self.ds = ds
+        self.config_dims = [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+        self.shape = tuple(ds.sizes[d] for d in self.config_dims)
+        self.counts = ds["n_particles"].values.astype(np.int64)
+        self.n_counts, self.n_seeds = len(self.counts), ds.sizes["seed"]
+        self.history = _history_counts(int(self.counts[-1]))
+        octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
+        self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
+        n_local = len(self.octaves)
+        self.layout = {
+            **{name: (self.n_counts,) for name in (
+                "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
+                "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
+                "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
+                "steps_per_particle")},
+            **{name: (self.n_counts, self.n_seeds) for name in (
+                "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok")},
+            **{name: (n_local,) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
+            **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
+            "status_count": (self.n_counts, len(STATUSES)),
+        }
+        self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
+        self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
+
+    def _cluster_index(self):
+        """(configuration, seed index) -> position on ``cluster``."""
+        ds = self.ds
+        lookup = {d: {_key(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
+        where = {}
+        for i in range(ds.sizes["cluster"]):
+            at = tuple(lookup[d][_key(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
+            where[at[:-1], at[-1]] = i
+        return where
+
+    def points(self, config, seed):
+        """The stored cluster's positions, or None."""
+        i = self.clusters.get((config, seed))
+        if i is None or self.ds["cluster_particles"].values[i] < 1:
+            return None
+        from .store import cluster_points  # here, so that the analysis of a curve needs no netCDF
+
+        return cluster_points(self.ds, i).astype(np.float64)
+
+    def dataset(self, out) -> xr.Dataset:
+        ds = self.ds
+        base = (*self.config_dims,)
+        dims = {name: base + {(): (), (self.n_counts,): ("n_particles",),
+                              (self.n_counts, self.n_seeds): ("n_particles", "seed"),
+                              (len(self.octaves),): ("n_local",),
+                              (self.n_counts, len(STATUSES)): ("n_particles", "status")}[shape]
+                for name, shape in self.layout.items()}
+        dims["D_reason"], dims["D_inf_reason"] = base + ("n_particles",), base
+        data = {}
+        for name, values in out.items():
+            if name.endswith("_ok") or name in ("D_seeds", "status_count"):
+                values = np.nan_to_num(values).astype(np.int64 if name in ("D_seeds", "status_count") else np.int8)
+            data[name] = (dims[name], values, {"long_name": _ATTRS[name]})
+        coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
+        coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
+        coords["status"] = np.array(STATUSES, object)
+        return xr.Dataset(data, coords=coords, attrs={
+            "title": "dlasweep summary: fractal dimension of every configuration",
+            "interval": "every interval is a 95% confidence interval (percentile bootstrap over seeds)",
+            "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
+            "bootstrap_resamples": RESAMPLES,
+        })
+
+
+def _history_counts(n_max):
+    """Counts from ``HISTORY_START`` to ``n_max``, ``LOCAL_PER_OCTAVE`` per octave."""
+    if n_max <= HISTORY_START:
+        return np.array([n_max], np.int64)
+    k = np.arange(int(LOCAL_PER_OCTAVE * np.log2(n_max / HISTORY_START)) + 1)
+    return np.unique(np.r_[np.round(HISTORY_START * 2.0 ** (k / LOCAL_PER_OCTAVE)), n_max].astype(np.int64))
+
+
+def _config(sweep, config, out, resamples):
+    """Fill ``out`` at one configuration."""
+    ds = sweep.ds
+    at = {d: i for d, i in zip(sweep.config_dims, config)}
+    cell = {name: ds[name][at].values for name in (
+        "n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps", "box_count")}
+    scales = ds["scale"].values
+    needed = [mass_radius_counts(int(n)) for n in sweep.counts]
+    grid = np.unique(np.concatenate([sweep.history, *needed]))
+    curves = np.full((sweep.n_seeds, len(grid)), np.nan)
+    for s in range(sweep.n_seeds):
+        points = sweep.points(config, s)
+        if points is not None:
+            rg = radius_of_gyration(points)
+            reach = grid <= len(rg)
+            curves[s, reach] = rg[grid[reach] - 1]
+        for k in range(sweep.n_counts):
+            m = int(cell["n_grown"][k, s])
+            if m < 1:
+                continue
+            if points is not None:
+                fit = fit_mass_radius(rg[:m])
+                out["D_cluster"][config][k, s], out["D_cluster_ok"][config][k, s] = fit.D, fit.ok
+            fit = fit_dimension(scales, cell["box_count"][k, s])
+            out["D_box_cluster"][config][k, s], out["D_box_cluster_ok"][config][k, s] = fit.D, fit.ok
+    rng = np.random.default_rng(0)
+    for k, n in enumerate(sweep.counts):
+        reached = cell["n_grown"][k] == n
+        _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
+               rng, resamples)
+    alive = (cell["n_grown"][-1] == sweep.counts[-1]) & np.isfinite(curves[:, -1])
+    _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, rng, resamples)
+
+
+def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resamples):
+    """Statistics at one count: headline D, box-counting D, Rg, costs, statuses."""
+    o = {name: values[(*config, ...)] for name, values in out.items()}
+    o["status_count"][k] = np.bincount(cell["status"][k].astype(np.int64), minlength=len(STATUSES))
+    grown = cell["n_grown"][k]
+    alive = grown > 0
+    if alive.any():
+        o["seconds_per_particle"][k] = np.nanmean(cell["wall_time"][k][alive] / grown[alive])
+        o["steps_per_particle"][k] = np.mean(cell["walk_steps"][k][alive] / grown[alive])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = cell["radius_gyration"][k] / cell["max_radius"][k]
+    for name, values in (("rg", cell["radius_gyration"][k]), ("rg_over_rmax", ratio)):
+        stats = ensemble(np.where(reached, values, np.nan), resamples=resamples)
+        prefix = "rg_" if name == "rg" else "rg_over_rmax_"
+        o["rg_mean" if name == "rg" else name][k] = stats.mean
+        o[prefix + "ci_lo"][k], o[prefix + "ci_hi"][k] = stats.ci_lo, stats.ci_hi
+    box = ensemble(np.where(reached, o["D_box_cluster"][k], np.nan), resamples=resamples)
+    o["D_box"][k], o["D_box_ci_lo"][k], o["D_box_ci_hi"][k] = box.mean, box.ci_lo, box.ci_hi
+    if reached.any():
+        o["D_box_ok_fraction"][k] = o["D_box_cluster_ok"][k][reached].mean()
+    o["D_seed_std"][k] = ensemble(np.where(reached, o["D_cluster"][k], np.nan)).std
+    use = reached & np.isfinite(curves).all(axis=1)
+    o["D_seeds"][k] = use.sum()
+    if not use.any():
+        o["D_reason"][k] = "no stored cluster reached this count"
+        return
+    curves = curves[use]
+    fit = fit_mass_radius(curves.mean(axis=0), counts)
+    o["D"][k], o["D_drift"][k], o["D_ok"][k] = fit.D, fit.drift, fit.ok
+    o["D_range_lo"][k], o["D_range_hi"][k] = fit.range_lo, fit.range_hi
+    o["D_reason"][k] = fit.reason
+    if len(curves) < 2 or not np.isfinite(fit.D):
+        o["D_reason"][k] = fit.reason or "one cluster: no interval over seeds"
+        return
+    window = (counts >= fit.range_lo) & (counts <= fit.range_hi)
+    means = _resampled_means(curves[:, window], rng, resamples)
+    slopes = _slopes(np.log(means), np.log(counts[window]))
+    o["D_ci_lo"][k], o["D_ci_hi"][k] = np.percentile(slopes, [2.5, 97.5])
+
+
+def _local(sweep, config, curves, out, rng, resamples):
+    """Local slopes of the ensemble curve with their band, and the extrapolation D_inf."""
+    o = {name: values[(*config, ...)] for name, values in out.items()}
+    if len(curves) < 2 or len(sweep.octaves) == 0:
+        o["D_inf_reason"][()] = "fewer than two clusters reached the largest count"
+        return
+    log_n = np.log(sweep.history)
+    mean = np.log(curves.mean(axis=0))
+    boot = np.log(_resampled_means(curves, rng, resamples))
+    local = np.array([_slopes(mean[None, w], log_n[w])[0] for w in sweep.octaves])
+    band = np.array([_slopes(boot[:, w], log_n[w]) for w in sweep.octaves])
+    o["D_local"][:] = local
+    o["D_local_ci_lo"][:], o["D_local_ci_hi"][:] = np.percentile(band, [2.5, 97.5], axis=1)
+    _extrapolate(sweep, o, local, band)
+
+
+def _extrapolate(sweep, o, local, band):
+    """D_inf from D_eff(n) = D_inf + a n**-w over independent (non-overlapping) octaves."""
+    step = LOCAL_PER_OCTAVE
+    pick = np.arange(len(local) - 1, -1, -step)[::-1]  # back from the largest octave
+    centres = np.array([np.exp(np.log(sweep.history[sweep.octaves[i]]).mean()) for i in pick])
+    y, boot = local[pick], band[pick]
+    sigma = boot.std(axis=1, ddof=1)
+    if len(pick) < MIN_OCTAVES:
+        o["D_inf_reason"][()] = f"{len(pick)} independent octaves of D_eff, need {MIN_OCTAVES}"
+        return
+    best = None
+    # The smallest octaves are the transient: start as low as the model allows.
+    for start in range(len(pick) - MIN_OCTAVES + 1):
+        for w in EXPONENTS:
+            design = np.c_[np.ones(len(pick) - start), centres[start:] ** -w]
+            weights = 1 / sigma[start:]
+            coef, *_ = np.linalg.lstsq(design * weights[:, None], y[start:] * weights, rcond=None)
+            chi2 = (((design @ coef - y[start:]) * weights) ** 2).sum() / (len(design) - 2)
+            if chi2 <= MAX_CHI2 and (best is None or chi2 < best[0]):
+                best = (chi2, start, w, design, weights, coef)
+        if best is not None:
+            break
+    if best is None:
+        o["D_inf_reason"][()] = (f"D_eff(n) is not D_inf + a n^-w for any w in {EXPONENTS} "
+                                 f"(chi2/dof > {MAX_CHI2:g} over every range of {MIN_OCTAVES} octaves)")
+        return
+    _, start, w, design, weights, coef = best
+    solve = np.linalg.pinv(design * weights[:, None])
+    values = solve[0] @ (boot[start:] * weights[:, None])
+    lo, hi = np.percentile(values, [2.5, 97.5])
+    if (hi - lo) / 2 > MAX_INF_HALF_WIDTH:
+        o["D_inf_reason"][()] = f"extrapolation too uncertain (95% CI half-width {(hi - lo) / 2:.3f})"
+        return
+    o["D_inf"][()], o["D_inf_ci_lo"][()], o["D_inf_ci_hi"][()] = coef[0], lo, hi
+    o["D_inf_exponent"][()], o["D_inf_range_lo"][()] = w, centres[start]
+
+
+def _resampled_means(curves, rng, resamples):
+    """Means over seeds of ``resamples`` bootstrap draws of the rows of ``curves``."""
+    draws = rng.integers(0, len(curves), (resamples, len(curves)))
+    return np.stack([curves[d].mean(axis=0) for d in draws])
+
+
+def _slopes(log_rg, log_n):
+    """Least-squares slope of log_n on each row of log_rg."""
+    x = log_rg - log_rg.mean(axis=-1, keepdims=True)
+    return (x * (log_n - log_n.mean())).sum(axis=-1) / (x * x).sum(axis=-1)
+
+
+def _key(value):
+    """A hashable, type-stable form of a coordinate value (bools and numpy scalars)."""
+    return value.item() if hasattr(value, "item") else value
