@@ -5,10 +5,15 @@ parameters (the sweep axes, in spec order), the box sizes and the seeds. Each
 task grows one cluster to the largest particle count. Every combination is
 checked with ``params.resolve`` before anything runs, so a bad value is
 reported at once, naming its key.
+
+With ``[run] target_ci`` the seeds are a first batch: the sweep adds
+replicates until the headline D of every configuration is known to that
+precision, or ``[run] max_seeds`` are grown (``sweep.run_sweep``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
@@ -27,7 +32,10 @@ MAX_PARTICLES = 100_000_000
 _SECTIONS = ("grid", "model", "run")
 _TOP_KEYS = ("name",)
 _GRID_KEYS = ("size", "n_particles", "seeds")
-_RUN_KEYS = ("root_seed", "workers")
+_RUN_KEYS = ("root_seed", "workers", "target_ci", "max_seeds")
+
+DEFAULT_MAX_SEEDS = 256
+"""Seed cap of a target sweep that names none (``[run] max_seeds``)."""
 
 
 class SpecError(ValueError):
@@ -62,7 +70,9 @@ class Task:
         """Grid indices for ``SeedSequence``; the seed part is the replicate number.
 
         With ``seeds = N`` the replicate number equals its index; with a list
-        of seeds it makes a replicate name the same stream in any spec.
+        of seeds it makes a replicate name the same stream in any spec. Either
+        way replicate j is the same cluster however many seeds a spec has, which
+        lets a target sweep add seeds without regrowing any.
         """
         return self.index[:-1] + (self.seed,)
 
@@ -87,6 +97,12 @@ class Spec:
         Preferred number of local workers (``[run] workers``).
     text : str
         The spec file as written.
+    target_ci : float or None
+        ``[run] target_ci``: add seeds until the 95% CI half-width of every
+        configuration's headline D is at most this; None for a fixed sweep.
+    max_seeds : int or None
+        ``[run] max_seeds``: the most seeds a target sweep grows (None without
+        ``target_ci``).
     """
 
     name: str
@@ -98,6 +114,8 @@ class Spec:
     root_seed: int
     workers: int | None
     text: str
+    target_ci: float | None = None
+    max_seeds: int | None = None
 
     @property
     def shape(self) -> tuple:
@@ -122,8 +140,20 @@ class Spec:
     def n_tasks(self) -> int:
         return math.prod(self.shape)
 
+    def with_seeds(self, n: int) -> Spec:
+        """The same spec with replicates 0..n-1: a batch of a target sweep.
+
+        Task keys and streams are those of the same replicates in any batch.
+        """
+        return dataclasses.replace(self, seeds=tuple(range(n)))
+
     def identity(self) -> dict:
-        """Everything the science results depend on, as plain JSON types."""
+        """Everything a task's result depends on, as plain JSON types.
+
+        ``target_ci`` and ``max_seeds`` are left out: they decide how many
+        replicates are grown, not what any replicate is, so finished tasks
+        stay valid when they change.
+        """
         return {
             "grid.size": list(self.sizes),
             "grid.n_particles": list(self.counts),
@@ -136,7 +166,7 @@ class Spec:
         }
 
     def digest(self) -> str:
-        """SHA-256 of ``identity()``: equal digests give equal results."""
+        """SHA-256 of ``identity()``: equal digests give equal task results."""
         text = json.dumps(self.identity(), sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
@@ -230,11 +260,31 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
     workers = run.get("workers")
     if workers is not None:
         workers = _integer("run.workers", workers, 1, None)
+    target_ci, max_seeds = _precision(grid, run, len(seeds))
 
     spec = Spec(name.strip(), tuple(sizes), tuple(counts), tuple(seeds), fixed, axes,
-                root_seed, workers, text)
+                root_seed, workers, text, target_ci, max_seeds)
     _check_grid(spec)
     return spec
+
+
+def _precision(grid, run, first_batch):
+    """``[run] target_ci`` and ``max_seeds``, checked against the first batch of seeds."""
+    if "target_ci" not in run:
+        if "max_seeds" in run:
+            raise SpecError("run.max_seeds: applies only with run.target_ci (a fixed sweep grows grid.seeds)")
+        return None, None
+    target_ci = run["target_ci"]
+    if isinstance(target_ci, bool) or not isinstance(target_ci, numbers.Real) \
+            or not math.isfinite(target_ci) or target_ci <= 0:
+        raise SpecError(f"run.target_ci: expected a finite number > 0, got {target_ci!r}")
+    if isinstance(grid.get("seeds"), list):
+        raise SpecError("grid.seeds: with run.target_ci it must be a count (the first batch, "
+                        "replicates 0..n-1), not a list")
+    max_seeds = _integer("run.max_seeds", run.get("max_seeds", DEFAULT_MAX_SEEDS), 1, None)
+    if max_seeds < first_batch:
+        raise SpecError(f"run.max_seeds: {max_seeds} is below grid.seeds = {first_batch}, the first batch")
+    return float(target_ci), max_seeds
 
 
 def _reject_unknown(prefix, table, known):

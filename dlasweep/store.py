@@ -50,6 +50,8 @@ _DESCRIPTIONS = {
     "diffusion_time": ("walk steps (or exact jumps) from release to sticking", "1"),
     "cluster_size": ("box side of the cluster, 0 = unbounded", "1"),
     "cluster_seed": ("replicate number of the cluster", "1"),
+    "D_ci_half_width": ("half-width of the 95% bootstrap confidence interval over seeds of the headline "
+                        "(mass-radius) fractal dimension D at the largest particle count", "1"),
     **{a: (f"{a} coordinate of the particle centre, in {_LENGTH}", "1") for a in AXES},
     **{name: (f"model parameter {name}", "1") for name in _params.DEFAULTS if name != "size"},
 }
@@ -111,6 +113,32 @@ def to_dataset(spec, scales, science, cluster_particles, ragged, failed=()) -> x
     if failed:
         attrs["failed_tasks"] = "; ".join(f"{key}: {message}" for key, message in failed)
     return _describe(xr.Dataset(data, coords=coords, attrs=attrs))
+
+
+def record_stop(ds, half_width, target_ci, max_seeds, reason) -> xr.Dataset:
+    """Add why a target sweep (``[run] target_ci``) stopped to its dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From ``to_dataset``.
+    half_width : xarray.DataArray
+        ``D_ci_half_width`` on ``(<swept params>..., size)``: the precision
+        reached per configuration (NaN: no interval).
+    target_ci : float
+    max_seeds : int
+        The spec's target and seed cap, recorded as global attributes.
+    reason : str
+        ``stop_reason``: "target_ci reached", "max_seeds reached" or
+        "tasks failed".
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    ds["D_ci_half_width"] = half_width
+    ds.attrs.update(target_ci=target_ci, max_seeds=max_seeds, stop_reason=reason)
+    return _describe(ds)
 
 
 def cluster_dataset(cluster, seed) -> xr.Dataset:

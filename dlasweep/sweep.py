@@ -12,6 +12,17 @@ identity so that a changed spec is refused. At the end the dataset is
 assembled from the parts in one pass, the clusters through flat files that
 are mapped, not loaded, so memory holds one cluster at a time. This is the
 only module that knows dask.
+
+Precision on demand (``[run] target_ci``): the seeds of the spec are a first
+batch. After each batch the dataset is assembled and summarised
+(``analysis.summarise``); while the 95% CI half-width of the headline D at
+the largest count is above the target for some configuration (NaN counts as
+above) and fewer than ``max_seeds`` seeds are grown, every configuration
+gets more seeds, replicates n..m-1 (``_more_seeds`` says how many). Replicate
+j is the same task in every batch, so a batch grows only new replicates, the
+result equals a fixed sweep with the final count, and a resumed run replays
+the same batches from its parts. The dataset records the achieved
+half-widths and why the sweep stopped (``store.record_stop``).
 """
 
 from __future__ import annotations
@@ -21,6 +32,7 @@ import importlib
 import itertools
 import json
 import logging
+import math
 import os
 import shutil
 import sys
@@ -35,11 +47,16 @@ from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 
 from . import measure, store
+from .analysis import summarise
 from .grow import grow
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
 MANIFEST = "manifest.json"
+
+TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reached", "tasks failed"
+"""Why a target sweep stopped (its ``stop_reason``); failed tasks stop it so that
+``--resume`` retries them rather than seeds being added around them."""
 
 
 class ResumeError(ValueError):
@@ -75,6 +92,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     xarray.Dataset
         Opened from ``out`` when given. Failed tasks (status ``error``) are
         listed in its ``failed_tasks`` attribute, and a warning names them.
+        A target sweep's dataset has as many seeds as it grew, and its stop
+        record (``store.record_stop``).
 
     Raises
     ------
@@ -86,28 +105,91 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         spec = load_spec(spec)
     if progress is None:
         progress = sys.stderr.isatty()
-    with _parts_folder(spec, out, resume) as parts:
-        todo = [t for t in spec.tasks() if not parts.finished(t.key)]
-        if todo:
-            with _connected(client, scheduler_file, workers or spec.workers, len(todo)) as dask_client:
-                bar = tqdm(total=spec.n_tasks, initial=spec.n_tasks - len(todo), unit="cluster",
+    # Tasks the sweep may run at most: the embedded cluster needs no more threads.
+    most = math.prod(spec.shape[:-1]) * (spec.max_seeds or len(spec.seeds))
+    with _parts_folder(spec, out, resume) as parts, contextlib.ExitStack() as session:
+        batch, dask_client = spec, None
+        while True:
+            todo = [t for t in batch.tasks() if not parts.finished(t.key)]
+            if todo:
+                if dask_client is None:
+                    dask_client = session.enter_context(
+                        _connected(client, scheduler_file, workers or spec.workers, most))
+                bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
                            desc=spec.name, disable=not progress, file=sys.stderr)
                 with bar:
-                    _compute(dask_client, spec, todo, parts, bar)
-        # Clusters are gathered into flat files beside the parts, then written from there.
-        with tempfile.TemporaryDirectory(prefix=".ragged-", dir=parts.path) as scratch:
-            ds, failed = _assemble(spec, parts, Path(scratch))
-            if out is None:
-                ds = ds.copy(deep=True)
-            else:
-                store.save(ds, out)
-                ds = store.open_sweep(out)
+                    _compute(dask_client, batch, todo, parts, bar)
+            # Clusters are gathered into flat files beside the parts, then written from there.
+            with tempfile.TemporaryDirectory(prefix=".ragged-", dir=parts.path) as scratch:
+                ds, failed = _assemble(batch, parts, Path(scratch))
+                if spec.target_ci is not None:
+                    half_width = _ci_half_width(ds)
+                    more, reason = _more_seeds(spec, len(batch.seeds), half_width.values, failed)
+                    if more:
+                        batch = spec.with_seeds(more)
+                        continue
+                    ds = store.record_stop(ds, half_width, spec.target_ci, spec.max_seeds, reason)
+                if out is None:
+                    ds = ds.copy(deep=True)
+                else:
+                    store.save(ds, out)
+                    ds = store.open_sweep(out)
+            break
         if not failed:
             parts.remove()
     if failed:
         warnings.warn(f"{len(failed)} of {spec.n_tasks} tasks failed: "
                       + "; ".join(f"{k}: {m}" for k, m in failed), RuntimeWarning, stacklevel=2)
     return ds
+
+
+def _ci_half_width(ds):
+    """Half-width of the 95% CI of the headline D at the largest count, per configuration.
+
+    NaN where ``summarise`` cannot give the interval (too few seeds or too
+    small clusters).
+    """
+    top = summarise(ds).isel(n_particles=-1)
+    return ((top["D_ci_hi"] - top["D_ci_lo"]) / 2).reset_coords(drop=True)
+
+
+def _more_seeds(spec, n, half_width, failed):
+    """Seeds the next batch should bring the sweep to, or ``None`` and why it stops.
+
+    The CI half-width of a mean over n seeds falls as 1/sqrt(n), so a
+    configuration at half-width w needs about ``n * (w / target_ci)**2``
+    seeds; 10% more covers the noise of w, so that one more batch usually
+    suffices (bootstrap intervals from few seeds are, if anything, too
+    narrow, so the estimate errs towards too few seeds, not too many). A
+    configuration without an interval yet (NaN) asks for twice n. The worst
+    configuration sets the batch, which is at least one first batch (so the
+    workers get a batch worth distributing) and at most ``max_seeds``.
+
+    Parameters
+    ----------
+    spec : Spec
+        A target sweep's spec (``target_ci`` set).
+    n : int
+        Seeds grown so far.
+    half_width : ndarray
+        CI half-width of every configuration after n seeds.
+    failed : sequence
+        Failed tasks of the batch: they stop the sweep.
+
+    Returns
+    -------
+    (int, None) or (None, str)
+        The new seed count, or the stop reason.
+    """
+    if failed:
+        return None, TASKS_FAILED
+    unmet = ~(half_width <= spec.target_ci)  # NaN compares False: unmet
+    if not unmet.any():
+        return None, TARGET_REACHED
+    if n >= spec.max_seeds:
+        return None, CAP_REACHED
+    wanted = np.where(np.isnan(half_width), 2 * n, np.ceil(1.1 * n * (half_width / spec.target_ci) ** 2))
+    return min(spec.max_seeds, max(n + len(spec.seeds), int(wanted[unmet].max()))), None
 
 
 def sweep_scales(spec: Spec) -> np.ndarray:
