@@ -38,6 +38,8 @@ MAX_INF_HALF_WIDTH = 0.05
 """Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
 MIN_OCTAVES = 4
 """Fewest independent octaves of D_eff an extrapolation needs."""
+DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
+"""Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
 
 _ATTRS = {
     "D": "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window",
@@ -76,6 +78,12 @@ _ATTRS = {
     "seconds_per_particle": "mean wall time per particle to grow to N",
     "steps_per_particle": "mean walk steps per particle to grow to N",
     "status_count": "clusters with each growth status at N",
+    "D_box_range_lo": "smallest box side of that cluster's box-counting fit window",
+    "D_box_range_hi": "largest box side of that cluster's box-counting fit window",
+    "box_slope": "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, largest N",
+    "box_slope_std": "standard deviation over seeds of box_slope",
+    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over seeds",
+    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over seeds",
 }
 
 
@@ -115,6 +123,10 @@ class _Sweep:
         self.config_dims = [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
         self.shape = tuple(ds.sizes[d] for d in self.config_dims)
         self.counts = ds["n_particles"].values.astype(np.int64)
+        self.scales = ds["scale"].values
+        top = int(ds["diffusion_time"].max()) if ds.sizes.get("particle", 0) else 1
+        # Half-integer edges: times are whole steps, and log bins narrower than one step alias.
+        self.time_edges = np.r_[0.5, np.unique(np.round(np.logspace(0, np.log10(max(top, 10)), 40))) + 0.5]
         self.n_counts, self.n_seeds = len(self.counts), ds.sizes["seed"]
         self.history = _history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
@@ -127,7 +139,11 @@ class _Sweep:
                 "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
                 "steps_per_particle")},
             **{name: (self.n_counts, self.n_seeds) for name in (
-                "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok")},
+                "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
+                "D_box_range_hi")},
+            **{name: (len(self.scales) - 1,) for name in ("box_slope", "box_slope_std")},
+            "diffusion_density": (len(self.time_edges) - 1,),
+            "diffusion_median": (len(DEPTH_EDGES) - 1,),
             **{name: (n_local,) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
             **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
             "status_count": (self.n_counts, len(STATUSES)),
@@ -154,13 +170,21 @@ class _Sweep:
 
         return cluster_points(self.ds, i).astype(np.float64)
 
+    def times(self, config, seed):
+        """The stored cluster's diffusion times."""
+        i = self.clusters[config, seed]
+        return self.ds["diffusion_time"][self.offsets[i]:self.offsets[i + 1]].values
+
     def dataset(self, out) -> xr.Dataset:
         ds = self.ds
         base = (*self.config_dims,)
         dims = {name: base + {(): (), (self.n_counts,): ("n_particles",),
                               (self.n_counts, self.n_seeds): ("n_particles", "seed"),
                               (len(self.octaves),): ("n_local",),
-                              (self.n_counts, len(STATUSES)): ("n_particles", "status")}[shape]
+                              (self.n_counts, len(STATUSES)): ("n_particles", "status"),
+                              (len(self.scales) - 1,): ("scale_mid",),
+                              (len(self.time_edges) - 1,): ("diffusion_bin",),
+                              (len(DEPTH_EDGES) - 1,): ("depth_bin",)}[shape]
                 for name, shape in self.layout.items()}
         dims["D_reason"], dims["D_inf_reason"] = base + ("n_particles",), base
         data = {}
@@ -171,6 +195,9 @@ class _Sweep:
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
         coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
         coords["status"] = np.array(STATUSES, object)
+        coords["scale_mid"] = np.sqrt(self.scales[1:] * self.scales[:-1])
+        coords["diffusion_bin"] = np.sqrt(self.time_edges[1:] * self.time_edges[:-1])
+        coords["depth_bin"] = (DEPTH_EDGES[1:] + DEPTH_EDGES[:-1]) / 2
         return xr.Dataset(data, coords=coords, attrs={
             "title": "dlasweep summary: fractal dimension of every configuration",
             "interval": "every interval is a 95% confidence interval (percentile bootstrap over seeds)",
@@ -197,12 +224,16 @@ def _config(sweep, config, out, resamples):
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]
     grid = np.unique(np.concatenate([sweep.history, *needed]))
     curves = np.full((sweep.n_seeds, len(grid)), np.nan)
+    times, depths = [], []
     for s in range(sweep.n_seeds):
         points = sweep.points(config, s)
         if points is not None:
             rg = radius_of_gyration(points)
             reach = grid <= len(rg)
             curves[s, reach] = rg[grid[reach] - 1]
+            distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
+            depths.append(distance[1:] / max(distance.max(), 1.0))
+            times.append(sweep.times(config, s)[1:])
         for k in range(sweep.n_counts):
             m = int(cell["n_grown"][k, s])
             if m < 1:
@@ -212,11 +243,24 @@ def _config(sweep, config, out, resamples):
                 out["D_cluster"][config][k, s], out["D_cluster_ok"][config][k, s] = fit.D, fit.ok
             fit = fit_dimension(scales, cell["box_count"][k, s])
             out["D_box_cluster"][config][k, s], out["D_box_cluster_ok"][config][k, s] = fit.D, fit.ok
+            out["D_box_range_lo"][config][k, s], out["D_box_range_hi"][config][k, s] = fit.range_lo, fit.range_hi
     rng = np.random.default_rng(0)
     for k, n in enumerate(sweep.counts):
         reached = cell["n_grown"][k] == n
         _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
                rng, resamples)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slopes = -np.diff(np.log(cell["box_count"][-1].astype(float)), axis=-1) / np.diff(np.log(scales))
+    grown = cell["n_grown"][-1] > 0
+    if grown.any():
+        out["box_slope"][config], out["box_slope_std"][config] = slopes[grown].mean(0), slopes[grown].std(0)
+    if times:
+        times, depths = np.concatenate(times).astype(float), np.concatenate(depths)
+        if len(times):
+            out["diffusion_density"][config] = np.histogram(times, sweep.time_edges, density=True)[0]
+            slot = np.clip(np.digitize(depths, DEPTH_EDGES) - 1, 0, len(DEPTH_EDGES) - 2)
+            out["diffusion_median"][config] = [np.median(times[slot == b]) if (slot == b).any() else np.nan
+                                               for b in range(len(DEPTH_EDGES) - 1)]
     alive = (cell["n_grown"][-1] == sweep.counts[-1]) & np.isfinite(curves[:, -1])
     _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, rng, resamples)
 

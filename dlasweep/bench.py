@@ -238,7 +238,7 @@ def analysis_bench(echo=print) -> dict:
         fit = fit_dimension(*box_counts(points, lattice=lattice))
         seconds[f"box_{model}"] = time.perf_counter() - start
         start = time.perf_counter()
-        fit_mass_radius(np.arange(1, len(points) + 1), radius_of_gyration(points))
+        fit_mass_radius(radius_of_gyration(points))
         seconds[f"rg_{model}"] = time.perf_counter() - start
         echo(f"{model} 2D, {len(points)} points: box counting + fit {seconds[f'box_{model}']:.2f} s (D={fit.D:.3f}), "
              f"Rg of every prefix + fit {seconds[f'rg_{model}']:.2f} s")

@@ -99,7 +99,7 @@ def _line(u, v):
     return slope, stderr
 
 
-def local_slopes(x, y, u):
+def _local_slopes(x, y, u):
     """Slope of y on x over each complete octave of u: start and end (exclusive) indices, slopes, centres."""
     ends = np.searchsorted(u, u + _OCTAVE * (1 + 1e-9), side="right")
     # An octave is complete when its points reach (nearly: counts are whole
@@ -166,7 +166,7 @@ def _scaling_fit(x, y, variable, sign, *, min_decades, min_points, flat_toleranc
         return Fit(nan, nan, nan, nan, nan, nan, m, nan, False, f"{m} admissible points, need {max(min_points, 3)}")
     u = np.log(variable)
     decades = (u - u[0]) / np.log(10)
-    local = local_slopes(x, y, u)
+    local = _local_slopes(x, y, u)
     whole = _window(x, y, u, sign, local, 0, m, flat_tolerance)
     if decades[-1] < min_decades:
         return result(whole, False, f"admissible range spans {decades[-1]:.2f} decades of {unit}, need {min_decades:g}")

@@ -1,10 +1,10 @@
 """Report of a sweep: a summary table, plots and a short write-up.
 
-Reads the dataset described in DESIGN.md, fits every cluster at every count
-with both estimators (box counting on the stored curve, mass-radius on the
-cluster's own growth history), summarises them over seeds and writes
-``summary.csv``, ``summary.md``, PNG plots and ``report.md`` into one folder.
-Plots the dataset has no data for are skipped, never drawn empty.
+Draws and writes what ``analysis.summarise`` computes (the headline
+ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
+Rg, costs); it computes nothing else. Writes ``summary.csv``,
+``summary.md``, PNG plots and ``report.md`` into one folder. Plots the
+dataset has no data for are skipped, never drawn empty.
 """
 
 from __future__ import annotations
@@ -14,11 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .fit import ensemble, fit_dimension, fit_mass_radius
-from .measure import radius_of_gyration
+from .analysis import summarise
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
-"""D of DLA: 2D off-lattice 1.7100(3); 3D about 2.50."""
+"""D of DLA: 2D off-lattice 1.7100(3) (Menshutin et al. 2008); 3D about 2.50."""
 
 EXACT_METHOD = {"kill_factor": 0.0, "jumps": True, "step": 0.0, "size": 0}
 """The exact variant of every approximation a sweep can switch on."""
@@ -26,7 +25,7 @@ EXACT_METHOD = {"kill_factor": 0.0, "jumps": True, "step": 0.0, "size": 0}
 FAILURE_AXES = ("kill_factor", "step", "size", "stickiness")
 """Parameters whose extremes are expected to break the model or the measurement."""
 
-ESTIMATORS = (("mr", "mass-radius (Rg over growth)"), ("box", "box counting"))
+ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
 _MAX_PANELS = 12
 
@@ -62,23 +61,42 @@ def report(ds, outdir) -> list:
 
 
 class _Sweep:
-    """The dataset with every cluster fitted and every configuration summarised."""
+    """The dataset, its summary, and names for its configurations."""
 
     def __init__(self, ds):
         self.ds = ds
-        dims = ds["n_grown"].dims
-        self.params = [d for d in dims if d not in ("size", "n_particles", "seed")]
-        self.config_dims = [*self.params, "size"]
+        self.s = summarise(ds)
+        self.config_dims = [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+        self.params = [d for d in self.config_dims if d != "size"]
         self.counts = ds["n_particles"].values
-        self.n_grown = ds["n_grown"].values
-        self.status = ds["status"].values
-        self.status_names = str(ds["status"].attrs.get("flag_meanings", "ok boundary step_limit exhausted error")).split()
+        self.status_names = list(self.s["status"].values)
         self.dim = int(ds["dim"].max()) if "dim" in ds else 2
         self.lattice = bool((ds["model"] == "lattice").all()) if "model" in ds else True
         self.configs = list(np.ndindex(*(ds.sizes[d] for d in self.config_dims)))
-        self._fit_box()
-        self._fit_mass_radius()
-        self.summary = {(c, k): self._summarise(c, k) for c in self.configs for k in range(len(self.counts))}
+        self.reference = REFERENCE_D.get(self.dim)
+
+    def at(self, name, config, **index):
+        """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
+        return self.s[name][{**dict(zip(self.config_dims, config)), **index}].values
+
+    def row(self, config, k) -> dict:
+        """One line of the summary table."""
+        row = {name: _plain(self.ds[name].values[i]) for name, i in zip(self.config_dims, config)}
+        tally = self.at("status_count", config, n_particles=k)
+        row.update(n_particles=int(self.counts[k]), seeds=int(tally.sum()),
+                   status=" ".join(f"{n}:{t}" for n, t in zip(self.status_names, tally) if t),
+                   flagged=bool(tally[1:].any()))
+        for name in ("D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
+                     "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean",
+                     "rg_ci_lo", "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi",
+                     "seconds_per_particle", "steps_per_particle", "D_reason"):
+            row[name] = _plain(self.at(name, config, n_particles=k))
+        for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_reason"):
+            row[name] = _plain(self.at(name, config)) if k == len(self.counts) - 1 else ""
+        return row
+
+    def rows(self):
+        return [self.row(c, k) for c in self.configs for k in range(len(self.counts))]
 
     def label(self, config, dims=None) -> str:
         """``name=value`` for the swept parameters and the box size of a configuration."""
@@ -94,74 +112,15 @@ class _Sweep:
                 parts.append(f"{name}={_plain(value)}")
         return ", ".join(parts) or "all clusters"
 
-    def _fit_box(self):
-        scales = self.ds["scale"].values
-        box = self.ds["box_count"].values
-        shape = self.n_grown.shape
-        self.box = {key: np.full(shape, np.nan) for key in ("D", "stderr", "lo", "hi")}
-        self.box["ok"] = np.zeros(shape, bool)
-        self.fits = {}
-        for index in np.ndindex(*shape):
-            if self.n_grown[index] < 1:
-                continue
-            fit = fit_dimension(scales, box[index])
-            self.fits[index] = fit
-            for key in ("D", "stderr", "lo", "hi"):
-                self.box[key][index] = getattr(fit, key)
-            self.box["ok"][index] = fit.ok
-
-    def _fit_mass_radius(self):
-        """Fit each stored cluster's Rg history up to every count."""
-        ds = self.ds
-        shape = self.n_grown.shape
-        self.mr = {"D": np.full(shape, np.nan), "ok": np.zeros(shape, bool)}
-        lookup = {d: {_key(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
-        self.cluster_of = {}
-        offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)]
-        self.depth, self.times = {}, {}
-        for i in range(ds.sizes["cluster"]):
-            where = tuple(lookup[d][_key(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
-            config, seed = where[:-1], where[-1]
-            self.cluster_of[config, seed] = i
-            if ds["cluster_particles"].values[i] < 1:
-                continue
-            points = _cluster_points(ds, i)
-            rg = radius_of_gyration(points)
-            for k in range(len(self.counts)):
-                index = (*config, k, seed)
-                m = int(self.n_grown[index])
-                if m >= 1:
-                    fit = fit_mass_radius(np.arange(1, m + 1), rg[:m])
-                    self.mr["D"][index], self.mr["ok"][index] = fit.D, fit.ok
-            distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
-            self.depth[config, seed] = distance / max(distance.max(), 1.0)
-            self.times[config, seed] = ds["diffusion_time"].values[offsets[i]:offsets[i + 1]]
-
-    def _summarise(self, config, k) -> dict:
-        at = (*config, k)
-        statuses = self.status[at]
-        codes, tally = np.unique(statuses, return_counts=True)
-        row = {name: _plain(self.ds[name].values[i]) for name, i in zip(self.config_dims, config)}
-        grown = self.n_grown[at]
-        alive = grown > 0
-        row.update(
-            n_particles=int(self.counts[k]),
-            seeds=len(statuses),
-            status=" ".join(f"{self.status_names[c]}:{t}" for c, t in zip(codes, tally)),
-            flagged=bool((statuses != 0).any()),
-            n_grown_mean=float(grown.mean()),
-        )
-        for prefix, fits in (("D_mr", self.mr), ("D_box", self.box)):
-            stats = ensemble(np.where(fits["ok"][at], fits["D"][at], np.nan))
-            row.update({f"{prefix}_{key}": getattr(stats, key) for key in ("mean", "std", "stderr", "ci_lo", "ci_hi")})
-            row[f"{prefix}_ok"] = int(stats.n)
-        for name in ("radius_gyration", "max_radius"):
-            stats = ensemble(self.ds[name].values[at][alive])
-            row[f"{name}_mean"], row[f"{name}_stderr"] = stats.mean, stats.stderr
-        with np.errstate(invalid="ignore", divide="ignore"):
-            row["seconds_per_particle"] = float(np.nanmean(self.ds["wall_time"].values[at][alive] / grown[alive])) if alive.any() else np.nan
-            row["steps_per_particle"] = float(np.mean(self.ds["walk_steps"].values[at][alive] / grown[alive])) if alive.any() else np.nan
-        return row
+    def cluster_of(self, config, seed):
+        """Position on ``cluster`` of a configuration's cluster, or None when it is not stored."""
+        if "cluster_particles" not in self.ds:
+            return None
+        match = self.ds["cluster_seed"].values == self.ds["seed"].values[seed]
+        for name, i in zip(self.config_dims, config):
+            match &= self.ds[f"cluster_{name}"].values == self.ds[name].values[i]
+        found = np.flatnonzero(match)
+        return int(found[0]) if len(found) else None
 
 
 def _cluster_points(ds, i):
@@ -170,20 +129,15 @@ def _cluster_points(ds, i):
     return cluster_points(ds, i)
 
 
-def _key(value):
-    """A hashable, type-stable form of a coordinate value (bools and numpy scalars)."""
-    return value.item() if hasattr(value, "item") else value
-
-
 def _plain(value):
-    value = _key(value)
+    value = value.item() if hasattr(value, "item") else value
     return value.decode() if isinstance(value, bytes) else value
 
 
 # Tables -------------------------------------------------------------------
 
 def _write_csv(sweep, path) -> Path:
-    rows = list(sweep.summary.values())
+    rows = sweep.rows()
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -191,26 +145,37 @@ def _write_csv(sweep, path) -> Path:
     return path
 
 
-def _estimate(row, prefix) -> str:
-    if row[f"{prefix}_ok"] == 0:
-        return f"no ok fit (0/{row['seeds']})"
-    text = f"{row[f'{prefix}_mean']:.3f}"
-    if row[f"{prefix}_ok"] > 1:
-        text += f" ± {row[f'{prefix}_stderr']:.3f} [{row[f'{prefix}_ci_lo']:.3f}, {row[f'{prefix}_ci_hi']:.3f}]"
-    return f"{text} ({row[f'{prefix}_ok']}/{row['seeds']})"
+def _interval(row, name) -> str:
+    """``value [lo, hi]`` (95% CI), or the value alone when there is no interval."""
+    value = row[name]
+    if not np.isfinite(value):
+        return "-"
+    lo, hi = row[f"{name}_ci_lo"], row[f"{name}_ci_hi"]
+    return f"{value:.3f} [{lo:.3f}, {hi:.3f}]" if np.isfinite(lo) else f"{value:.3f} (no CI)"
+
+
+def _headline(row) -> str:
+    text = _interval(row, "D")
+    if text != "-":
+        text += f" over N {row['D_range_lo']:.0f}-{row['D_range_hi']:.0f}"
+        if not row["D_ok"]:
+            text += " (local slope not flat)"
+    return f"{text}, {row['D_seeds']} clusters"
 
 
 def _markdown_table(sweep) -> str:
-    head = [*sweep.config_dims, "N", "status", "D mass-radius", "D box counting", "std (mr, box)", "Rg", "s/particle"]
+    head = [*sweep.config_dims, "N", "status", "D mass-radius (ensemble)", "D box counting (ok fits)",
+            "D per-seed std", "Rg", "Rg/Rmax", "s/particle"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for row in sweep.summary.values():
+    for row in sweep.rows():
         cells = [str(row[d]) for d in sweep.config_dims] + [
             str(row["n_particles"]),
             row["status"] + (" ⚠" if row["flagged"] else ""),
-            _estimate(row, "D_mr"),
-            _estimate(row, "D_box"),
-            f"{row['D_mr_std']:.3f}, {row['D_box_std']:.3f}",
-            f"{row['radius_gyration_mean']:.1f}",
+            _headline(row),
+            f"{_interval(row, 'D_box')} ({row['D_box_ok_fraction']:.0%})",
+            f"{row['D_seed_std']:.3f}",
+            f"{row['rg_mean']:.1f}",
+            _interval(row, "rg_over_rmax"),
             f"{row['seconds_per_particle']:.2e}",
         ]
         lines.append("| " + " | ".join(cells) + " |")
@@ -219,8 +184,10 @@ def _markdown_table(sweep) -> str:
 
 def _write_table(sweep, path) -> Path:
     path.write_text(
-        "D: mean ± standard error over seeds [bootstrap 95% CI] (fits that passed / seeds).\n"
-        "Only fits that passed their checks enter the statistics; ⚠: some cluster stopped early.\n\n"
+        "Every interval is a 95% confidence interval (bootstrap over seeds). D mass-radius: one fit of "
+        "n ~ <Rg>^D to the seed-averaged growth histories of every cluster that reached N, over the window "
+        "given. Box counting: mean of every cluster's own fit (in brackets: the share of fits whose local "
+        "slope is flat). ⚠: some cluster stopped early.\n\n"
         + _markdown_table(sweep)
     )
     return path
@@ -305,13 +272,15 @@ def draw_cluster(points, params, path) -> Path:
 
 
 def _gallery(sweep, path):
-    shown = [c for c in sweep.configs if (c, 0) in sweep.cluster_of][:_MAX_PANELS]
+    shown = [c for c in sweep.configs if sweep.cluster_of(c, 0) is not None][:_MAX_PANELS]
     if not shown:
         return None
     fig, axes = _figure(len(shown), 3.4, 3.4)
+    last = len(sweep.counts) - 1
     for ax, config in zip(axes, shown):
-        points = _cluster_points(sweep.ds, sweep.cluster_of[config, 0])
-        status = sweep.status_names[sweep.status[(*config, len(sweep.counts) - 1, 0)]]
+        points = _cluster_points(sweep.ds, sweep.cluster_of(config, 0))
+        status = sweep.status_names[int(sweep.ds["status"][{**dict(zip(sweep.config_dims, config)),
+                                                             "n_particles": last, "seed": 0}])]
         ax.set_title(f"{sweep.label(config)}\nN={len(points)}, {status}", fontsize=8)
         if len(points):
             _draw_points(ax, points.astype(float), sweep.lattice, 3.0)
@@ -333,82 +302,97 @@ def _box_counts(sweep, path):
     # Past the largest cluster every count is 1: nothing to see there.
     visible = scales <= 2 * scales[min(np.argmax(box.max(axis=tuple(range(box.ndim - 1))) <= 1), len(scales) - 1)]
     for ax, config in zip(axes, shown):
-        index = (*config, last, 0)
-        for seed in range(sweep.ds.sizes["seed"]):
-            ax.loglog(scales[visible], box[(*config, last, seed)][visible], color="0.75", lw=0.7)
-        fit = sweep.fits.get(index)
-        ax.loglog(scales[visible], box[index][visible], "o", ms=2.5, color="C0", label="seed 0")
+        where = {**dict(zip(sweep.config_dims, config)), "n_particles": last}
+        curves = sweep.ds["box_count"][where].values
+        for seed in range(len(curves)):
+            ax.loglog(scales[visible], curves[seed][visible], color="0.75", lw=0.7)
+        ax.loglog(scales[visible], curves[0][visible], "o", ms=2.5, color="C0", label="seed 0")
         ax.minorticks_off()
-        if fit is not None and np.isfinite(fit.D):
-            span = (scales >= fit.lo) & (scales <= fit.hi)
+        D = sweep.at("D_box_cluster", config, n_particles=last, seed=0)
+        lo, hi = (sweep.at(f"D_box_range_{e}", config, n_particles=last, seed=0) for e in ("lo", "hi"))
+        if np.isfinite(D):
+            ok = bool(sweep.at("D_box_cluster_ok", config, n_particles=last, seed=0))
+            span = (scales >= lo) & (scales <= hi)
             x = scales[span]
-            anchor = np.exp(np.mean(np.log(box[index][span]) + fit.D * np.log(x)))
-            ax.loglog(x, anchor * x ** -fit.D, color="C3" if fit.ok else "C1", lw=1.5,
-                      label=f"D={fit.D:.3f}±{fit.stderr:.3f}" + ("" if fit.ok else " (not ok)"))
-            ax.axvspan(fit.lo, fit.hi, color="C2", alpha=0.1, lw=0)
+            anchor = np.exp(np.mean(np.log(curves[0][span]) + D * np.log(x)))
+            ax.loglog(x, anchor * x ** -D, color="C3" if ok else "C1", lw=1.5,
+                      label=f"seed 0: D={D:.3f}" + ("" if ok else " (not flat)"))
+            ax.axvspan(lo, hi, color="C2", alpha=0.1, lw=0)
         ax.set_title(sweep.label(config), fontsize=8)
         ax.set_xlabel("box side s")
         ax.set_ylabel("boxes N(s)")
         ax.legend(fontsize=7)
-    fig.suptitle(f"Box counts at N={sweep.counts[last]} (grey: all seeds; shaded: fitted range)")
+    fig.suptitle(f"Box counts at N={sweep.counts[last]} (grey: all seeds; shaded: seed 0's fitted range)")
     _save(fig, path)
     return ("Box counts N(s) at the largest count, every seed in grey, seed 0 with the fitted line over the "
-            "range the fit chose (shaded; orange when the fit did not pass its checks).")
+            "range the fit chose (shaded; orange when its local slope is not flat). A finite-cluster estimate: "
+            "it reads low.")
 
 
 def _local_slopes(sweep, path):
-    scales = sweep.ds["scale"].values
-    if len(scales) < 3:
+    n_local = sweep.s["n_local"].values
+    if len(n_local) == 0 or not np.isfinite(sweep.s["D_local"].values).any():
         return None
-    box = sweep.ds["box_count"].values.astype(float)
-    last = len(sweep.counts) - 1
-    mid = np.sqrt(scales[1:] * scales[:-1])
-    fig, (ax,) = _figure(1, 6.5, 4.2)
+    fig, (mr, box) = _figure(2, 5.2, 4.0)
+    mid = sweep.s["scale_mid"].values
     for c, config in enumerate(sweep.configs[:10]):
-        curves = box[(*config, last)]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slopes = -np.diff(np.log(curves), axis=-1) / np.diff(np.log(scales))
-        below = np.nanmax(sweep.box["hi"][(*config, last)]) if np.isfinite(sweep.box["hi"][(*config, last)]).any() else scales[-1]
-        keep = mid <= 2 * below
-        mean, spread = np.nanmean(slopes, axis=0)[keep], np.nanstd(slopes, axis=0)[keep]
-        ax.semilogx(mid[keep], mean, color=_colour(c), label=sweep.label(config))
-        ax.fill_between(mid[keep], mean - spread, mean + spread, color=_colour(c), alpha=0.15, lw=0)
-    ax.axhline(REFERENCE_D.get(sweep.dim, np.nan), color="k", ls="--", lw=1, label=f"reference {REFERENCE_D.get(sweep.dim)}")
-    ax.axvline(2, color="0.5", ls=":", lw=1)
-    ax.set_xlabel("box side s")
-    ax.set_ylabel("local slope  -d ln N / d ln s")
-    ax.set_title(f"Local box-counting slopes at N={sweep.counts[last]} (mean ± std over seeds)")
-    ax.legend(fontsize=7)
+        colour, label = _colour(c), sweep.label(config)
+        local = sweep.at("D_local", config)
+        mr.semilogx(n_local, local, color=colour, label=label)
+        mr.fill_between(n_local, sweep.at("D_local_ci_lo", config), sweep.at("D_local_ci_hi", config),
+                        color=colour, alpha=0.2, lw=0)
+        d_inf = sweep.at("D_inf", config)
+        if np.isfinite(d_inf):
+            mr.axhspan(sweep.at("D_inf_ci_lo", config), sweep.at("D_inf_ci_hi", config), color=colour, alpha=0.1,
+                       lw=0)
+            mr.annotate(f"D_inf {d_inf:.3f}", (n_local[-1], d_inf), fontsize=6, color=colour,
+                        xytext=(2, 0), textcoords="offset points")
+        slope, spread = sweep.at("box_slope", config), sweep.at("box_slope_std", config)
+        fitted = sweep.at("D_box_range_hi", config, n_particles=len(sweep.counts) - 1)
+        top = 2 * np.nanmax(fitted) if np.isfinite(fitted).any() else mid[-1]
+        keep = np.isfinite(slope) & (mid >= 1.5) & (mid <= top)
+        box.semilogx(mid[keep], slope[keep], color=colour, label=label)
+        box.fill_between(mid[keep], (slope - spread)[keep], (slope + spread)[keep], color=colour, alpha=0.15, lw=0)
+    for ax in (mr, box):
+        if sweep.reference:
+            ax.axhline(sweep.reference, color="k", ls="--", lw=1,
+                       label=f"off-lattice reference {sweep.reference}")
+    mr.set_xlabel("particles n (octave centre)")
+    mr.set_ylabel("D_eff = d ln n / d ln <Rg>")
+    mr.set_title("Mass-radius local slope, ensemble (95% band)")
+    box.set_xlabel("box side s")
+    box.set_ylabel("-d ln N / d ln s")
+    box.set_title(f"Box-counting local slope at N={sweep.counts[-1]} (mean ± std)")
+    mr.legend(fontsize=6)
     _save(fig, path)
-    return ("Local slopes of the box counts against scale: a plateau would be a clean power law. Below s=2 "
-            "(dotted) the particle shape dominates; towards the cluster size the slope falls.")
+    return ("Left: the local slope D_eff(n) of the seed-averaged growth history over each octave of n, with its "
+            "bootstrap 95% band, and D_inf with its CI where the extrapolation D_eff = D_inf + a n^-w holds. "
+            "Right: the box-counting local slope, which falls towards the cluster size (the low bias).")
 
 
 def _dimension_vs_n(sweep, path):
-    means = [sweep.summary[config, k][f"D_{prefix}_mean"] for config in sweep.configs[:10]
-             for k in range(len(sweep.counts)) for prefix, _ in ESTIMATORS]
-    if not np.isfinite(means).any():
-        return None  # no fit passed its checks: nothing to draw
+    if not np.isfinite(sweep.s["D"].values).any():
+        return None
     fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
-        for e, (prefix, name) in enumerate(ESTIMATORS):
-            rows = [sweep.summary[config, k] for k in range(len(sweep.counts))]
-            mean = np.array([r[f"D_{prefix}_mean"] for r in rows])
-            low = mean - np.array([r[f"D_{prefix}_ci_lo"] for r in rows])
-            high = np.array([r[f"D_{prefix}_ci_hi"] for r in rows]) - mean
+        for e, (name, title) in enumerate(ESTIMATORS):
+            mean = sweep.at(name, config)
+            low = mean - sweep.at(f"{name}_ci_lo", config)
+            high = sweep.at(f"{name}_ci_hi", config) - mean
             x = sweep.counts * (1.04 if e else 1.0)
             ax.errorbar(x, mean, yerr=[np.nan_to_num(low), np.nan_to_num(high)], color=_colour(c),
                         marker="os"[e], mfc="none" if e else _colour(c), ls="-:"[e], capsize=2,
-                        label=f"{name}, {sweep.label(config)}")
-    ax.axhline(REFERENCE_D.get(sweep.dim, np.nan), color="k", ls="--", lw=1, label="reference")
+                        label=f"{title}, {sweep.label(config)}")
+    if sweep.reference:
+        ax.axhline(sweep.reference, color="k", ls="--", lw=1, label="off-lattice reference")
     _log_x(ax)
     ax.set_xlabel("particles N")
-    ax.set_ylabel("D (mean over seeds, 95% CI)")
+    ax.set_ylabel("D (95% CI)")
     ax.set_title("Fractal dimension against cluster size")
     ax.legend(fontsize=6)
     _save(fig, path)
-    return ("D against N for both estimators (filled/solid: mass-radius; open/dotted: box counting), mean over "
-            "seeds with bootstrap 95% intervals; the dashed line is the reference value.")
+    return ("D against N: filled/solid the headline ensemble mass-radius estimate, open/dotted the mean box-counting "
+            "estimate; bars are 95% CIs; the dashed line is the 2D off-lattice reference value.")
 
 
 def _dimension_spread(sweep, path):
@@ -416,42 +400,39 @@ def _dimension_spread(sweep, path):
     shown = sweep.configs[:20]
     fig, (ax,) = _figure(1, max(5.0, 0.6 * len(shown) + 2), 4.2)
     for c, config in enumerate(shown):
-        for e, (prefix, name) in enumerate(ESTIMATORS):
-            fits = sweep.mr if prefix == "mr" else sweep.box
-            values, ok = fits["D"][(*config, last)], fits["ok"][(*config, last)]
+        for e, (name, prefix) in enumerate((("mass-radius, per cluster", "D_cluster"),
+                                            ("box counting, per cluster", "D_box_cluster"))):
+            values = sweep.at(prefix, config, n_particles=last)
+            ok = sweep.at(f"{prefix}_ok", config, n_particles=last).astype(bool)
             x = c + (0.2 if e else -0.2) + np.linspace(-0.06, 0.06, len(values))
             ax.scatter(x[ok], values[ok], s=12, marker="os"[e], color=f"C{e}", label=name if c == 0 else None)
-            ax.scatter(x[~ok], values[~ok], s=14, marker="x", color="C3", label="fit not ok" if c == 0 and e == 0 else None)
-            row = sweep.summary[config, last]
-            ax.errorbar(c + (0.2 if e else -0.2), row[f"D_{prefix}_mean"], yerr=row[f"D_{prefix}_std"], color="k", capsize=3)
-    ax.axhline(REFERENCE_D.get(sweep.dim, np.nan), color="k", ls="--", lw=1)
+            ax.scatter(x[~ok], values[~ok], s=14, marker="x", color="C3",
+                       label="fit not flat" if c == 0 and e == 0 else None)
+        row = sweep.row(config, last)
+        if np.isfinite(row["D_ci_lo"]):
+            ax.errorbar(c - 0.2, row["D"], yerr=[[row["D"] - row["D_ci_lo"]], [row["D_ci_hi"] - row["D"]]],
+                        color="k", capsize=3, marker="_", label="ensemble D, 95% CI" if c == 0 else None)
+    if sweep.reference:
+        ax.axhline(sweep.reference, color="k", ls="--", lw=1)
     ax.set_xticks(range(len(shown)), [sweep.label(c) for c in shown], rotation=30, ha="right", fontsize=7)
-    ax.set_ylabel("D per seed (bars: mean ± std)")
+    ax.set_ylabel("D")
     ax.set_title(f"Spread of D over seeds at N={sweep.counts[last]}")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     _save(fig, path)
-    return "D of every seed at the largest count, both estimators; red crosses are fits that did not pass their checks."
+    return ("D of every seed's own fit at the largest count, both estimators (red crosses: the fit's local slope "
+            "is not flat), and the ensemble headline with its 95% CI (black).")
 
 
 def _diffusion_times(sweep, path):
-    if not sweep.times:
+    if not np.isfinite(sweep.s["diffusion_density"].values).any():
         return None
     fig, (hist, depth) = _figure(2, 5.0, 3.8)
-    bins = np.linspace(0, 1, 11)
+    bins, depths = sweep.s["diffusion_bin"].values, sweep.s["depth_bin"].values
     for c, config in enumerate(sweep.configs[:10]):
-        seeds = [s for s in range(sweep.ds.sizes["seed"]) if (config, s) in sweep.times]
-        if not seeds:
-            continue
-        times = np.concatenate([sweep.times[config, s][1:] for s in seeds]).astype(float)
-        where = np.concatenate([sweep.depth[config, s][1:] for s in seeds])
-        if len(times) == 0:
-            continue
-        # Half-integer edges: times are whole steps, and log bins narrower than one step alias.
-        edges = np.unique(np.round(np.logspace(0, np.log10(max(times.max(), 10.0)), 40))) + 0.5
-        hist.hist(times, bins=np.r_[0.5, edges], histtype="step", density=True, color=_colour(c), label=sweep.label(config))
-        slot = np.clip(np.digitize(where, bins) - 1, 0, len(bins) - 2)
-        median = [np.median(times[slot == b]) if (slot == b).any() else np.nan for b in range(len(bins) - 1)]
-        depth.semilogy(0.5 * (bins[1:] + bins[:-1]), median, "o-", ms=3, color=_colour(c))
+        density = sweep.at("diffusion_density", config)
+        hist.step(bins, np.where(density > 0, density, np.nan), where="mid", color=_colour(c),
+                  label=sweep.label(config))
+        depth.semilogy(depths, sweep.at("diffusion_median", config), "o-", ms=3, color=_colour(c))
     hist.set_xscale("log")
     hist.set_yscale("log")
     hist.set_xlabel("diffusion time (walk steps or jumps to stick)")
@@ -473,11 +454,15 @@ def _reference_of(sweep, config, methods):
     """The configuration with every method axis at its exact value, or None when not swept."""
     reference = list(config)
     for name in methods:
-        exact = [i for i, v in enumerate(sweep.ds[name].values) if _key(v) == EXACT_METHOD[name]]
+        exact = [i for i, v in enumerate(sweep.ds[name].values) if _plain(v) == EXACT_METHOD[name]]
         if not exact:
             return None
         reference[sweep.config_dims.index(name)] = exact[0]
     return tuple(reference)
+
+
+def _half(row, name):
+    return (row[f"{name}_ci_hi"] - row[f"{name}_ci_lo"]) / 2
 
 
 def _speed_accuracy(sweep, path):
@@ -490,13 +475,12 @@ def _speed_accuracy(sweep, path):
     fig, (dev_d, dev_rg) = _figure(2, 5.5, 4.2)
     groups = {r: g for g, r in enumerate(dict.fromkeys(r for _, r in pairs))}
     for config, ref in pairs:
-        row, base = sweep.summary[config, last], sweep.summary[ref, last]
+        row, base = sweep.row(config, last), sweep.row(ref, last)
         cost = row["seconds_per_particle"]
-        delta = row["D_mr_mean"] - base["D_mr_mean"]
-        delta_err = np.hypot(row["D_mr_stderr"], base["D_mr_stderr"])
-        ratio = row["radius_gyration_mean"] / base["radius_gyration_mean"] - 1
-        ratio_err = (1 + ratio) * np.hypot(row["radius_gyration_stderr"] / row["radius_gyration_mean"],
-                                          base["radius_gyration_stderr"] / base["radius_gyration_mean"])
+        delta = row["D"] - base["D"]
+        delta_err = np.hypot(_half(row, "D"), _half(base, "D"))
+        ratio = row["rg_mean"] / base["rg_mean"] - 1
+        ratio_err = (1 + ratio) * np.hypot(_half(row, "rg") / row["rg_mean"], _half(base, "rg") / base["rg_mean"])
         style = dict(color=_colour(groups[ref]), marker="*" if config == ref else "o", ms=9 if config == ref else 5,
                      mec="C3" if row["flagged"] else None, capsize=2)
         text = sweep.label(config, methods)
@@ -516,7 +500,7 @@ def _speed_accuracy(sweep, path):
     _save(fig, path)
     return ("Cost per particle against the deviation from the exact method (" + ", ".join(
         f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count; "
-        "error bars combine the standard errors of both ensembles.")
+        "bars combine both 95% CIs in quadrature.")
 
 
 def _failure(sweep, path):
@@ -534,13 +518,13 @@ def _failure(sweep, path):
         for s, members in enumerate(series.values()):
             xs, rows = [], []
             for config in members:
-                row = sweep.summary[config, last]
+                row = sweep.row(config, last)
                 x = float(row[axis])
                 if axis == "size":
                     if x == 0:
-                        top.axhline(row["D_mr_mean"], color=_colour(s), ls=":", lw=1)
+                        top.axhline(row["D"], color=_colour(s), ls=":", lw=1)
                         continue
-                    x /= max(row["max_radius_mean"], 1e-9)
+                    x /= max(row["rg_mean"] / row["rg_over_rmax"], 1e-9)
                 xs.append(x)
                 rows.append(row)
             if not rows:
@@ -549,17 +533,13 @@ def _failure(sweep, path):
             order = np.argsort(xs)
             xs, rows = xs[order], [rows[i] for i in order]
             label = sweep.label(members[0], others) if others else None
-            for ax, key, marker in ((top, "D_mr", "o"), (top, "D_box", "s"), (bottom, None, "o")):
-                if key:
-                    y = np.array([r[f"{key}_mean"] for r in rows])
-                    err = np.array([r[f"{key}_stderr"] for r in rows])
-                else:
-                    y = np.array([r["radius_gyration_mean"] / r["max_radius_mean"] for r in rows])
-                    err = np.zeros_like(y)
+            for ax, key, marker in ((top, "D", "o"), (top, "D_box", "s"), (bottom, "rg_over_rmax", "o")):
+                y = np.array([r[key] for r in rows])
+                err = [y - np.array([r[f"{key}_ci_lo"] for r in rows]), np.array([r[f"{key}_ci_hi"] for r in rows]) - y]
                 ax.errorbar(xs, y, yerr=np.nan_to_num(err), color=_colour(s), marker=marker,
                             mfc="none" if key == "D_box" else _colour(s), capsize=2,
-                            label=(f"{'box' if key == 'D_box' else 'mass-radius'}, {label}" if key else label))
-                flagged = np.array([r["flagged"] or (key and r[f"{key}_ok"] < r["seeds"]) for r in rows], bool)
+                            label=(f"{'box' if key == 'D_box' else 'mass-radius'}, {label}" if ax is top else label))
+                flagged = np.array([r["flagged"] for r in rows], bool)
                 ax.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3)
                 _mark_missing(ax, xs, y)
         xlabel = "box side / cluster radius" if axis == "size" else axis
@@ -568,15 +548,16 @@ def _failure(sweep, path):
             # kill_factor and step keep a linear axis: their exact value is 0
             if axis == "size" and (np.asarray(sweep.ds[axis].values, float) > 0).sum() > 1:
                 _log_x(ax)
-        top.axhline(REFERENCE_D.get(sweep.dim, np.nan), color="k", ls="--", lw=1)
-        top.set_ylabel("D (mean ± stderr)")
+        if sweep.reference:
+            top.axhline(sweep.reference, color="k", ls="--", lw=1)
+        top.set_ylabel("D (95% CI)")
         top.legend(fontsize=6)
-        bottom.set_ylabel("Rg / R_max")
+        bottom.set_ylabel("Rg / R_max (95% CI)")
     fig.suptitle(f"Where methods fail, at N={sweep.counts[last]} (red rings: flagged; red x: no value)")
     _save(fig, path)
     return ("D and Rg/R_max against the parameters that break the model or its measurement ("
-            + ", ".join(axes_present) + "). Red rings mark configurations where a cluster stopped early or a fit "
-            "did not pass; red crosses at the bottom mark configurations with no value at all.")
+            + ", ".join(axes_present) + "). Red rings mark configurations where a cluster stopped early; red "
+            "crosses at the bottom mark configurations with no value at all.")
 
 
 _PLOTS = {
@@ -597,37 +578,48 @@ _PLOTS = {
 def _write_report(sweep, figures, path) -> Path:
     ds = sweep.ds
     last = len(sweep.counts) - 1
-    reference = REFERENCE_D.get(sweep.dim)
-    best = [(sweep.label(c), sweep.summary[c, last]) for c in sweep.configs]
+    rows = [(sweep.label(c), sweep.row(c, last)) for c in sweep.configs]
+    attrs = sweep.s.attrs
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
         "",
-        f"{ds.sizes['cluster']} clusters; counts {', '.join(map(str, sweep.counts))}; "
+        f"{ds.sizes.get('cluster', 0)} clusters; counts {', '.join(map(str, sweep.counts))}; "
         f"{ds.sizes['seed']} seeds per configuration; root seed {ds.attrs.get('root_seed')}; "
         f"{ds.attrs.get('source', 'dlasweep')}.",
         "",
+        f"Intervals: {attrs['interval']}.",
+        "",
         "## Result",
         "",
-        f"D from the radius of gyration over each cluster's growth history, mean over seeds at N = {sweep.counts[last]} "
-        "(± standard error, bootstrap 95% interval, fits that passed / seeds):",
+        f"Headline D at N = {sweep.counts[last]}: the ensemble mass-radius estimate (n ~ <Rg>^D fitted to the "
+        "seed-averaged growth histories of every cluster that reached N, over the window of n stated), and "
+        "D_inf, its extrapolation to infinite N where the data allow it:",
         "",
-        *[f"- {label}: {_estimate(row, 'D_mr')}; box counting {_estimate(row, 'D_box')}" for label, row in best],
+    ]
+    for label, row in rows:
+        inf = (f"D_inf = {_interval(row, 'D_inf')}" if np.isfinite(row["D_inf"])
+               else f"no D_inf ({row['D_inf_reason']})")
+        lines.append(f"- {label}: D = {_headline(row)}; {inf}.")
+    lines += [
         "",
-        f"Reference: 2D off-lattice DLA D = 1.7100(3); 3D DLA about 2.50 (this sweep: {sweep.dim}D, "
-        f"reference {reference}).",
+        f"Box counting, a finite-cluster estimate that reads low (not an equal of the above): "
+        + "; ".join(f"{label}: {_interval(row, 'D_box')}" for label, row in rows) + ".",
+        "",
+        f"Reference: 2D off-lattice DLA D = 1.7100(3) (Menshutin et al. 2008), 1.715(4) (Tolman and Meakin "
+        f"1989); 3D DLA about 2.50. This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
         "",
         "## How D is measured, and how far to trust it",
         "",
-        "- **Mass-radius** (the estimator to quote): N ~ Rg^D fitted over the cluster's own growth history, "
-        "leaving out the first 5% of the particles (and at least 50), on the longest straight window of at "
-        "least one decade of N. Averaged over seeds it is the better estimator: its spread over seeds is the "
-        "honest error bar, and the standard error of the mean shrinks as 1/sqrt(seeds).",
-        "- **Box counting** on one finite cluster reads low: boxes at the edge of the cluster are partly empty, "
-        "and between the particle size (s >= 2 used) and a quarter of the cluster's extent there is little "
-        "more than a decade. The fit picks the longest straight window and says when there is none.",
-        "- A fit's own standard error measures the scatter about its line, not the spread over seeds; the "
-        "table's errors are over seeds. Fits that do not pass their checks (too short a range, curvature, poor "
-        "line) are left out of the statistics and counted in the table.",
+        "- **Mass-radius, ensemble** (the estimator to quote): <Rg>(n) averaged over seeds, from the end of "
+        "the transient (5% of N) to N; the fit takes the widest window of at least a decade whose local slope "
+        "is flat within its own uncertainty. The CI is a bootstrap over seeds with that window fixed; no "
+        "cluster is left out for its own fit. A window whose local slope is not flat is marked.",
+        "- **Local slope and D_inf**: D_eff(n) over each octave of n with its bootstrap band (figure "
+        "`local_slopes`); D_inf fits D_eff = D_inf + a n^-w over independent octaves and is given only when "
+        "that model describes the data and pins D_inf down.",
+        "- **Box counting** on one finite cluster reads low: boxes at the cluster's edge are partly empty. "
+        "Each cluster's fit gives a standard error that includes the drift of its local slope; the table "
+        "gives the mean over every cluster and the share of fits that are flat.",
         "",
         "## Summary table",
         "",

@@ -95,11 +95,12 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     assert {r["stickiness"] for r in rows} == {"1.0", "0.5"}
     assert all(r["seeds"] == "3" and r["status"] == "ok:3" for r in rows)
     big = [r for r in rows if r["n_particles"] == "800"]
-    assert all(1.3 < float(r["D_mr_mean"]) < 2.1 for r in big)
+    assert all(1.3 < float(r["D"]) < 2.1 and float(r["D_ci_lo"]) < float(r["D"]) < float(r["D_ci_hi"]) for r in big)
     text = (tmp_path / "out" / "report.md").read_text()
     for name in names - {"report.md", "summary.csv", "summary.md"}:
         assert f"({name})" in text
     assert "speed_accuracy" not in text and "reads low" in text and "1.7100(3)" in text
+    assert text.count("95% confidence interval") == 1
 
 
 def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
