@@ -38,6 +38,10 @@ MAX_INF_HALF_WIDTH = 0.05
 """Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
 MIN_OCTAVES = 4
 """Fewest independent octaves of D_eff an extrapolation needs."""
+EXACT_METHOD = {"kill_factor": 0.0, "jumps": True, "step": 0.0, "size": 0}
+"""The exact variant of every approximation a sweep can switch on."""
+COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
+"""Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
 
@@ -78,6 +82,12 @@ _ATTRS = {
     "seconds_per_particle": "mean wall time per particle to grow to N",
     "steps_per_particle": "mean walk steps per particle to grow to N",
     "status_count": "clusters with each growth status at N",
+    "D_vs_exact": "D minus D of the exact method (other parameters equal) at equal N",
+    "D_vs_exact_half_width": "95% CI half-width of D_vs_exact (both CIs in quadrature)",
+    "rg_mean_vs_exact": "rg_mean over rg_mean of the exact method, minus 1, at equal N",
+    "rg_mean_vs_exact_half_width": "95% CI half-width of rg_mean_vs_exact (both CIs in quadrature)",
+    "rg_over_rmax_vs_exact": "rg_over_rmax minus that of the exact method at equal N",
+    "rg_over_rmax_vs_exact_half_width": "95% CI half-width of rg_over_rmax_vs_exact (both CIs in quadrature)",
     "D_box_range_lo": "smallest box side of that cluster's box-counting fit window",
     "D_box_range_hi": "largest box side of that cluster's box-counting fit window",
     "box_slope": "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, largest N",
@@ -112,7 +122,39 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     out["D_inf_reason"] = np.full(sweep.shape, "", object)
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
+    _against_exact(sweep, out)
     return sweep.dataset(out)
+
+
+def exact_reference(ds, config_dims, config):
+    """The configuration with every swept method axis at its exact value (``EXACT_METHOD``), or None."""
+    reference = list(config)
+    for name in config_dims:
+        if name in EXACT_METHOD and ds.sizes[name] > 1:
+            exact = [i for i, v in enumerate(ds[name].values) if _key(v) == EXACT_METHOD[name]]
+            if not exact:
+                return None
+            reference[config_dims.index(name)] = exact[0]
+    return tuple(reference)
+
+
+def _against_exact(sweep, out):
+    """Each configuration's departure from the exact method at equal N, with its 95% CI half-width."""
+    for config in np.ndindex(*sweep.shape):
+        ref = exact_reference(sweep.ds, sweep.config_dims, config)
+        if ref is None or ref == config and not any(
+                d in EXACT_METHOD and sweep.ds.sizes[d] > 1 for d in sweep.config_dims):
+            continue
+        for name, relative in COMPARED.items():
+            stem = "rg" if name == "rg_mean" else name
+            value, base = out[name][config], out[name][ref]
+            half, base_half = ((out[f"{stem}_ci_hi"][c] - out[f"{stem}_ci_lo"][c]) / 2 for c in (config, ref))
+            if relative:
+                out[f"{name}_vs_exact"][config] = value / base - 1
+                out[f"{name}_vs_exact_half_width"][config] = value / base * np.hypot(half / value, base_half / base)
+            else:
+                out[f"{name}_vs_exact"][config] = value - base
+                out[f"{name}_vs_exact_half_width"][config] = np.hypot(half, base_half)
 
 
 class _Sweep:
@@ -137,7 +179,7 @@ class _Sweep:
                 "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
                 "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
                 "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
-                "steps_per_particle")},
+                "steps_per_particle", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
             **{name: (self.n_counts, self.n_seeds) for name in (
                 "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
                 "D_box_range_hi")},
