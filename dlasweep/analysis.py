@@ -117,7 +117,8 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
         docstring says how each is estimated.
     """
     sweep = _Sweep(ds)
-    out = {name: np.full(sweep.shape + shape, np.nan) for name, shape in sweep.layout.items()}
+    out = {name: np.full(sweep.shape + tuple(sweep.extra[d] for d in dims), np.nan)
+           for name, dims in sweep.layout.items()}
     out["D_reason"] = np.full(sweep.shape + (sweep.n_counts,), "", object)
     out["D_inf_reason"] = np.full(sweep.shape, "", object)
     for config in np.ndindex(*sweep.shape):
@@ -140,10 +141,11 @@ def exact_reference(ds, config_dims, config):
 
 def _against_exact(sweep, out):
     """Each configuration's departure from the exact method at equal N, with its 95% CI half-width."""
+    if not any(d in EXACT_METHOD and sweep.ds.sizes[d] > 1 for d in sweep.config_dims):
+        return
     for config in np.ndindex(*sweep.shape):
         ref = exact_reference(sweep.ds, sweep.config_dims, config)
-        if ref is None or ref == config and not any(
-                d in EXACT_METHOD and sweep.ds.sizes[d] > 1 for d in sweep.config_dims):
+        if ref is None:
             continue
         for name, relative in COMPARED.items():
             stem = "rg" if name == "rg_mean" else name
@@ -173,23 +175,27 @@ class _Sweep:
         self.history = _history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
-        n_local = len(self.octaves)
+        self.extra = {"n_particles": self.n_counts, "seed": self.n_seeds, "n_local": len(self.octaves),
+                      "scale_mid": len(self.scales) - 1, "diffusion_bin": len(self.time_edges) - 1,
+                      "depth_bin": len(DEPTH_EDGES) - 1, "status": len(STATUSES)}
+        """Sizes of the dims a summary has beside the configuration's."""
         self.layout = {
-            **{name: (self.n_counts,) for name in (
+            **{name: ("n_particles",) for name in (
                 "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
                 "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
                 "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
                 "steps_per_particle", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
-            **{name: (self.n_counts, self.n_seeds) for name in (
+            **{name: ("n_particles", "seed") for name in (
                 "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
                 "D_box_range_hi")},
-            **{name: (len(self.scales) - 1,) for name in ("box_slope", "box_slope_std")},
-            "diffusion_density": (len(self.time_edges) - 1,),
-            "diffusion_median": (len(DEPTH_EDGES) - 1,),
-            **{name: (n_local,) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
+            **{name: ("scale_mid",) for name in ("box_slope", "box_slope_std")},
+            "diffusion_density": ("diffusion_bin",),
+            "diffusion_median": ("depth_bin",),
+            **{name: ("n_local",) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
             **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
-            "status_count": (self.n_counts, len(STATUSES)),
+            "status_count": ("n_particles", "status"),
         }
+        """Every float summary variable -> its dims beside the configuration's."""
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
 
@@ -220,14 +226,7 @@ class _Sweep:
     def dataset(self, out) -> xr.Dataset:
         ds = self.ds
         base = (*self.config_dims,)
-        dims = {name: base + {(): (), (self.n_counts,): ("n_particles",),
-                              (self.n_counts, self.n_seeds): ("n_particles", "seed"),
-                              (len(self.octaves),): ("n_local",),
-                              (self.n_counts, len(STATUSES)): ("n_particles", "status"),
-                              (len(self.scales) - 1,): ("scale_mid",),
-                              (len(self.time_edges) - 1,): ("diffusion_bin",),
-                              (len(DEPTH_EDGES) - 1,): ("depth_bin",)}[shape]
-                for name, shape in self.layout.items()}
+        dims = {name: base + extra for name, extra in self.layout.items()}
         dims["D_reason"], dims["D_inf_reason"] = base + ("n_particles",), base
         data = {}
         for name, values in out.items():
