@@ -124,7 +124,7 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
     _against_exact(sweep, out)
-    return sweep.dataset(out)
+    return sweep.dataset(out, resamples)
 
 
 def exact_reference(ds, config_dims, config):
@@ -223,7 +223,7 @@ class _Sweep:
         i = self.clusters[config, seed]
         return self.ds["diffusion_time"][self.offsets[i]:self.offsets[i + 1]].values
 
-    def dataset(self, out) -> xr.Dataset:
+    def dataset(self, out, resamples) -> xr.Dataset:
         ds = self.ds
         base = (*self.config_dims,)
         dims = {name: base + extra for name, extra in self.layout.items()}
@@ -243,7 +243,7 @@ class _Sweep:
             "title": "dlasweep summary: fractal dimension of every configuration",
             "interval": "every interval is a 95% confidence interval (percentile bootstrap over seeds)",
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
-            "bootstrap_resamples": RESAMPLES,
+            "bootstrap_resamples": resamples,
         })
 
 
