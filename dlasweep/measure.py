@@ -6,6 +6,7 @@ order; no I/O. Lengths are in lattice units (off-lattice: particle diameters).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -17,27 +18,35 @@ _HALF = 0.5
 
 
 def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
-    """Box sides ``2**(k/per_octave)``, k = 0, 1, ..., from 1 up to ``max_extent``.
+    """Whole box sides ``b * 2**j`` (b odd, below ``2 * per_octave``), from 1 up to ``max_extent``.
 
-    The last scale is the first one >= ``max_extent``, so a set of that extent
-    fits in one box there. A sweep passes one shared series to every cluster.
+    For ``per_octave=4``: 1, 2, ..., 8, 10, 12, 14, 16, 20, 24, 28, 32, 40, ...
+    (every integer up to ``2 * per_octave``, then ``per_octave`` sides per
+    factor of two). The last side is the first one >= ``max_extent``, so a set
+    of that extent fits in one box there. Every side but the largest few has
+    its double in the series: the series is made of the families
+    (b, 2b, 4b, ...) that ``box_counts`` measures by halving bitmaps. A sweep
+    passes one shared series to every cluster.
 
     Parameters
     ----------
     max_extent : float
-        Largest extent (in particle sizes) the scales must reach.
+        Largest extent (in particle sizes) the sides must reach.
     per_octave : int
-        Scales per factor of two.
+        Sides per factor of two from ``per_octave`` on; a power of two.
 
     Returns
     -------
     ndarray of float64
+        Whole numbers, increasing, starting at 1.
     """
-    if per_octave < 1:
-        raise ValueError(f"per_octave: {per_octave} is below 1")
-    # The tolerance keeps an exact power of two from gaining one extra scale.
-    top = max(int(np.ceil(per_octave * np.log2(max(float(max_extent), 1.0)) - 1e-9)), 0)
-    return 2.0 ** (np.arange(top + 1) / per_octave)
+    if per_octave < 1 or per_octave & (per_octave - 1):
+        raise ValueError(f"per_octave: {per_octave} is not a power of two")
+    sides = [1]
+    while sides[-1] < max_extent:
+        # The next b * 2**j: the integers up to 2p, then steps of 2**j in [p 2**j, 2p 2**j).
+        sides.append(sides[-1] + (1 << max((sides[-1] // per_octave).bit_length() - 1, 0)))
+    return np.array(sides, np.float64)
 
 
 _BITMAP_CAP = 1 << 31
@@ -138,86 +147,107 @@ def _ones(word):
 
 
 @jit
-def _halve(fine, fine_shape, shift, coarse, shape):
-    """Fill ``coarse``, the bitmap of boxes twice the side of ``fine``'s, and count its boxes.
+def _halve(fine, fine_shape, fine_per_axis, source, shift, coarse, shape):
+    """Fill ``coarse``, the bitmaps of grids of twice the side of ``fine``'s, and return their least count.
 
-    Coarse box b covers fine boxes 2b - shift and 2b + 1 - shift on every axis
-    (``shift`` 0 or 1); bitmaps are laid out as in ``_mark_boxes``.
+    Both are stacks of bitmaps laid out as in ``_mark_boxes``, one per grid;
+    grid g's offset on axis a is digit a of g (axis 0 most significant) in
+    base ``len(source)`` for ``coarse``, ``fine_per_axis`` for ``fine``. On an
+    axis where a coarse grid has offset i, its box b covers boxes
+    2b - shift[i] and 2b + 1 - shift[i] of the fine grid of offset source[i].
     """
     dim = len(shape)
-    merged = np.zeros(2 * coarse.shape[1], np.uint64)
+    merged = np.zeros(2 * coarse.shape[2], np.uint64)
     index = np.zeros(dim, np.int64)
-    count = 0
-    for row in range(coarse.shape[0]):
-        rest = row
-        for a in range(dim - 2, -1, -1):
-            index[a] = rest % shape[a]
-            rest //= shape[a]
-        # OR of the fine rows under this coarse row, moved one bit up when
-        # shifted so that fine bits 2b - shift, 2b + 1 - shift pair up.
-        merged[:] = 0
-        for corner in range(1 << (dim - 1)):
-            source = 0
-            for a in range(dim - 1):
-                r = 2 * index[a] - shift + ((corner >> a) & 1)
-                if r < 0 or r >= fine_shape[a]:
-                    source = -1
-                    break
-                source = source * fine_shape[a] + r
-            if source >= 0:
-                for w in range(fine.shape[1]):
-                    merged[w] |= fine[source, w]
-        if shift:
-            carry = np.uint64(0)
-            for w in range(len(merged)):
-                merged[w], carry = (merged[w] << np.uint64(1)) | carry, merged[w] >> np.uint64(63)
-        for w in range(coarse.shape[1]):
-            word = _pairs(merged[2 * w]) | (_pairs(merged[2 * w + 1]) << np.uint64(32))
-            coarse[row, w] = word
-            count += _ones(word)
-    return count
+    step = np.zeros(dim, np.int64)
+    best = -1
+    for g in range(coarse.shape[0]):
+        rest, grid, unit = g, 0, 1
+        for a in range(dim - 1, -1, -1):
+            i = rest % len(source)
+            rest //= len(source)
+            step[a] = shift[i]
+            grid += source[i] * unit
+            unit *= fine_per_axis
+        count = 0
+        for row in range(coarse.shape[1]):
+            rest = row
+            for a in range(dim - 2, -1, -1):
+                index[a] = rest % shape[a]
+                rest //= shape[a]
+            # OR of the fine rows under this coarse row, moved one bit up when
+            # shifted so that fine bits 2b - shift, 2b + 1 - shift pair up.
+            merged[:] = 0
+            for corner in range(1 << (dim - 1)):
+                fine_row = 0
+                for a in range(dim - 1):
+                    r = 2 * index[a] - step[a] + ((corner >> a) & 1)
+                    if r < 0 or r >= fine_shape[a]:
+                        fine_row = -1
+                        break
+                    fine_row = fine_row * fine_shape[a] + r
+                if fine_row >= 0:
+                    for w in range(fine.shape[2]):
+                        merged[w] |= fine[grid, fine_row, w]
+            if step[dim - 1]:
+                carry = np.uint64(0)
+                for w in range(len(merged)):
+                    merged[w], carry = (merged[w] << np.uint64(1)) | carry, merged[w] >> np.uint64(63)
+            for w in range(coarse.shape[2]):
+                word = _pairs(merged[2 * w]) | (_pairs(merged[2 * w + 1]) << np.uint64(32))
+                coarse[g, row, w] = word
+                count += _ones(word)
+        best = count if best < 0 else min(best, count)
+    return best
 
 
-def _grid_shape(high, origin, scale, radius):
-    return np.floor((high + radius - origin) / scale).astype(np.int64) + 1
-
-
-def _empty_bitmap(shape):
-    """A zeroed bitmap for a grid of ``shape``, or None when it would exceed ``_BITMAP_CAP`` bits."""
+def _empty_bitmaps(shape, grids):
+    """Zeroed bitmaps for ``grids`` grids of ``shape``, or None when they would exceed ``_BITMAP_CAP`` bits."""
     rows, words = math.prod(int(n) for n in shape[:-1]), -(-int(shape[-1]) // 64)
-    return np.zeros((rows, words), np.uint64) if rows * words * 64 <= _BITMAP_CAP else None
+    return np.zeros((grids, rows, words), np.uint64) if grids * rows * words * 64 <= _BITMAP_CAP else None
 
 
-def _from_points(points, high, origin, scale, radius):
-    """Count the boxes of one grid that the particles touch; also return its bitmap (None if too large)."""
-    shape = _grid_shape(high, origin, scale, radius)
-    bitmap = _empty_bitmap(shape)
-    args = (points, tuple(origin), float(scale), radius, tuple(shape))
-    if bitmap is not None:
-        return _mark_boxes(*args, bitmap, np.empty((0, 0), np.int64)), bitmap, shape
-    visits = np.empty((len(points) * (2 ** len(shape) if radius > 0.0 else 1), len(shape)), np.int64)
-    return len(np.unique(visits[: _mark_boxes(*args, np.empty((0, 0), np.uint64), visits)], axis=0)), None, shape
+def _from_points(points, high, offsets, scale, radius, keep):
+    """Least count over the grids of side ``scale`` with per-axis ``offsets``, from the particles.
 
-
-def _halvings(scales):
-    """Map each scale that is twice another to that one."""
-    twice = np.isclose(2 * scales[None, :], scales[:, None], rtol=1e-9, atol=0.0)
-    return {int(k): int(np.argmax(twice[k])) for k in np.flatnonzero(twice.any(axis=1))}
+    Also returns their stacked bitmaps (None unless ``keep`` and they fit the
+    cap) and the grids' common shape. A grid too large for a bitmap is
+    counted by sorting its boxes.
+    """
+    dim = points.shape[1]
+    # Anchored at -1/2 - offset: the largest offset needs the most boxes.
+    shape = np.floor((high + radius + _HALF + offsets[-1]) / scale).astype(np.int64) + 1
+    grids = list(itertools.product(offsets, repeat=dim))
+    stack = _empty_bitmaps(shape, len(grids)) if keep else None
+    best = None
+    for g, offset in enumerate(grids):
+        args = (points, tuple(-_HALF - o for o in offset), float(scale), radius, tuple(shape))
+        bitmap = stack[g : g + 1] if stack is not None else _empty_bitmaps(shape, 1)
+        if bitmap is not None:
+            count = _mark_boxes(*args, bitmap[0], np.empty((0, 0), np.int64))
+        else:
+            visits = np.empty((len(points) * (2**dim if radius > 0.0 else 1), dim), np.int64)
+            count = len(np.unique(visits[: _mark_boxes(*args, np.empty((0, 0), np.uint64), visits)], axis=0))
+        best = count if best is None else min(best, count)
+    return best, stack, shape
 
 
 def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
-    """Number of boxes of side s that the set occupies, for a series of s.
+    """Number of boxes of side s that the set occupies, for a series of whole s.
 
     Rules: with ``lattice=True`` each point is a unit cell centred on its
-    coordinates and counts in the one box holding its centre (for integer s
-    on an aligned grid that box covers the whole cell). With ``lattice=False``
-    each point is a disk/sphere of unit diameter and counts in every box its
-    interior overlaps (nearest point of the box closer than 1/2 to the
-    centre), so one particle may count in up to 2**dim boxes.
+    coordinates and counts in the one box holding its centre (for integer
+    points that box holds the whole cell). With ``lattice=False`` each point
+    is a disk/sphere of unit diameter and counts in every box its interior
+    overlaps (nearest point of the box closer than 1/2 to the centre), so one
+    particle may count in up to 2**dim boxes.
 
-    Boxes are placed to minimise the count: the grid's corner sits at
-    ``min(points) - 1/2 - (j / offsets) * s`` on every axis, j = 0 ..
-    offsets-1 (shifts along the diagonal), and the smallest count is kept.
+    Boxes are placed to minimise the count: a grid's corner sits at
+    ``min(points) - 1/2 - o``, o an integer offset chosen on each axis from
+    O(s) = {floor(t s / offsets) : t < offsets}, joined with O(s/2) when s/2
+    is among the scales; every combination of per-axis offsets is tried and
+    the smallest count kept. As O(2s) holds O(s) and a 2s-box is a union of
+    s-boxes, the count never rises from s to 2s.
 
     Parameters
     ----------
@@ -226,10 +256,10 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     lattice : bool
         Lattice sites (True) or off-lattice unit-diameter particles (False).
     scales : array_like, optional
-        Box sides, each >= 1. Default: ``default_scales`` up to the set's
-        extent. Scales beyond the extent give a count of 1.
+        Box sides, whole numbers >= 1. Default: ``default_scales`` up to the
+        set's extent. Scales beyond the extent give a count of 1.
     offsets : int
-        Number of grid placements tried per scale.
+        Number of t in a side's own offsets floor(t s / offsets) per axis.
 
     Returns
     -------
@@ -251,8 +281,10 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     high = np.array([c.max() for c in p.T])
     extent = float(high.max()) + 2 * _HALF
     scales = default_scales(extent) if scales is None else np.asarray(scales, dtype=np.float64).ravel()
-    if len(scales) == 0 or not (scales >= 1.0).all():
-        raise ValueError("scales: expected box sides >= 1 (the particle size)")
+    # Whole sides and integer offsets put every lattice cell in one box, and
+    # make a box of side 2s an exact union of boxes of side s.
+    if len(scales) == 0 or not (np.isfinite(scales) & (scales >= 1.0) & (scales == np.floor(scales))).all():
+        raise ValueError("scales: expected whole box sides >= 1 (the particle size)")
     radius = 0.0 if lattice else _HALF
     if p.dtype.kind == "i" and extent < 2**31:
         p = p.astype(np.int32)  # half the memory traffic
@@ -260,39 +292,44 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     # previous particle's: the bitmaps are read from cache, not memory.
     if high[0] <= max(len(p), 1 << 22):
         p = _first_axis_order(p, int(high[0]))
-    # Grid j of side 2t is made of boxes of grid (2j) % offsets of side t,
-    # its corner (2j) // offsets t-boxes lower: its count follows from that
-    # grid's bitmap, word by word, instead of from the particles.
-    parent = _halvings(scales)
-    needed, children = {}, {}
+    dim = p.shape[1]
+    sides = [int(s) for s in scales]
+    first = {}
+    for k, s in enumerate(sides):
+        first.setdefault(s, k)
+    parent = {k: first[s // 2] for k, s in enumerate(sides) if s % 2 == 0 and s // 2 in first}
+    children = {}
     for k, m in parent.items():
-        needed.setdefault(m, set()).update(2 * j % offsets for j in range(offsets))
         children.setdefault(m, []).append(k)
+    grid_offsets = {}
+    for k in sorted(range(len(sides)), key=sides.__getitem__):
+        own = {t * sides[k] // offsets for t in range(offsets)}
+        grid_offsets[k] = sorted(own.union(grid_offsets[parent[k]] if k in parent else ()))
     # One box of a side >= extent, placed at the low corner, holds the whole
     # set; a small cluster measured at a sweep's scales skips most of them.
     counts = np.ones(len(scales), np.int64)
-    # Depth first, so that only the bitmaps on the current chain of halvings
-    # are held; None means "from the particles".
-    pending = [(k, None) for k in range(len(scales)) if k not in parent and scales[k] < extent]
+    # Depth first along each family s, 2s, 4s, ..., so that only the bitmaps
+    # of one side and its double are held; None means "from the particles".
+    pending = [(k, None) for k in range(len(sides)) if k not in parent and sides[k] < extent]
     while pending:
         k, finer = pending.pop()
-        kept, best = {}, None
-        for j in range(offsets):
-            if finer is None:
-                origin = np.full(p.shape[1], -_HALF - (j / offsets) * scales[k])
-                count, bitmap, shape = _from_points(p, high, origin, scales[k], radius)
-            else:
-                fine, fine_shape = finer[2 * j % offsets]
-                shift = 2 * j // offsets
-                shape = (fine_shape - 1 + shift) // 2 + 1
-                bitmap = _empty_bitmap(shape)
-                count = _halve(fine, tuple(fine_shape), shift, bitmap, tuple(shape))
-            best = count if best is None else min(best, count)
-            if bitmap is not None and j in needed.get(k, ()):
-                kept[j] = (bitmap, shape)
-        counts[k] = best
-        complete = needed.get(k, set()) <= set(kept)
-        pending += [(child, kept if complete else None) for child in children.get(k, []) if scales[child] < extent]
+        side, own = sides[k], grid_offsets[k]
+        kids = [c for c in children.get(k, ()) if sides[c] < extent]
+        stack = None
+        if finer is not None:
+            # The box of side 2s at offset o is the union of 2**dim boxes of
+            # the grid of side s at offset o % s, shifted by one where o >= s.
+            fine, fine_shape, fine_own = finer
+            shape = fine_shape // 2 + 1
+            stack = _empty_bitmaps(shape, len(own) ** dim)
+        if stack is None:
+            counts[k], stack, shape = _from_points(p, high, own, side, radius, keep=bool(kids))
+        else:
+            half = side // 2
+            source = np.array([fine_own.index(o % half) for o in own], np.int64)
+            shift = np.array([o >= half for o in own], np.int64)
+            counts[k] = _halve(fine, tuple(fine_shape), len(fine_own), source, shift, stack, tuple(shape))
+        pending += [(c, None if stack is None else (stack, shape, own)) for c in kids]
     return scales, counts
 
 
