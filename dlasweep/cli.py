@@ -1,4 +1,4 @@
-"""The ``dlasweep`` command: grow, sweep, report, bench.
+"""The ``dlasweep`` command: grow, sweep, report, info, bench.
 
 Exit status: 0 success, 2 bad input (one line naming the bad key or value,
 nothing written), 1 failure at run time. Every input is checked, output
@@ -16,9 +16,14 @@ import traceback
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from . import __version__, store
 from . import params as _params
+from .analysis import summarise
+from .fit import fit_mass_radius
 from .grow import grow
+from .measure import radius_of_gyration
 from .report import draw_cluster, plot_bench, report
 from .spec import MAX_PARTICLES, SpecError, load_spec
 from .sweep import ResumeError, run_sweep
@@ -41,8 +46,12 @@ def main(argv=None) -> int:
     """Run the command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     command = "dlasweep"
+    parser = _parser()
     try:
-        args = _parser().parse_args(argv)
+        args = parser.parse_args(argv)
+        if args.command is None:
+            _say(parser.format_help().rstrip())
+            return 2
         command = f"dlasweep {args.command}"
         return args.handler(args)
     except SystemExit as done:  # --help, --version
@@ -65,15 +74,16 @@ def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="dlasweep", allow_abbrev=False,
                      description="Parameter sweeps of diffusion-limited aggregation.")
     parser.add_argument("--version", action="version", version=f"dlasweep {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True)
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     one = commands.add_parser("grow", allow_abbrev=False,
                               help="grow one cluster and save it (.nc) or draw it (.png, .svg)")
-    one.add_argument("-n", type=int, required=True, help="number of particles")
-    one.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    for name, default in _params.DEFAULTS.items():
-        flags = dict.fromkeys([f"--{name}", f"--{name.replace('_', '-')}"])
-        one.add_argument(*flags, dest=name, metavar="V", help=f"model parameter (default {default!r})")
+    one.add_argument("-n", type=_params.integer, required=True, help="number of particles, e.g. 100000 or 1e5")
+    one.add_argument("--seed", type=_params.integer, default=0, help="random seed (default 0)")
+    for name, param in _params.PARAMETERS.items():
+        one.add_argument(f"--{name.replace('_', '-')}", dest=name, **_option(param))
+        if "_" in name:  # the spec's spelling works too, without a second line of help
+            one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
     one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
     one.set_defaults(handler=_grow)
 
@@ -93,6 +103,11 @@ def _parser() -> argparse.ArgumentParser:
     summary.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
     summary.set_defaults(handler=_report)
 
+    about = commands.add_parser("info", allow_abbrev=False,
+                                help="what a dataset holds: spec, axes, counts, statuses, failed tasks, headline D")
+    about.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep` or `dlasweep grow`")
+    about.set_defaults(handler=_info)
+
     timing = commands.add_parser("bench", allow_abbrev=False,
                                  help="kernel speed, memory and cost scaling into results/bench")
     timing.add_argument("-o", "--output", type=Path, default=Path("results/bench"), help="output folder")
@@ -101,6 +116,14 @@ def _parser() -> argparse.ArgumentParser:
     size.add_argument("--quick", action="store_true", help="only the smallest N (a smoke test)")
     timing.set_defaults(handler=_bench)
     return parser
+
+
+def _option(param) -> dict:
+    """``metavar`` and ``help`` of a model parameter's option, from its row of ``params.PARAMETERS``."""
+    default = f"Default: {param.shown or _text(param.default)}."
+    if isinstance(param.values, tuple):
+        return {"metavar": "{" + ",".join(map(_text, param.values)) + "}", "help": f"{param.meaning}. {default}"}
+    return {"metavar": "V", "help": f"{param.meaning}. Allowed: {param.values}. {default}"}
 
 
 def _grow(args) -> int:
@@ -117,7 +140,8 @@ def _grow(args) -> int:
                  for k in _params.DEFAULTS if getattr(args, k) is not None}
         _params.resolve(**given)
     except ValueError as err:
-        raise UsageError(f"--{err}") from None
+        name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
+        raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
 
     cluster = grow(args.n, args.seed, **given)
     if cluster.status != "ok":
@@ -172,6 +196,89 @@ def _report(args) -> int:
         ds.close()
     print(f"{outdir}: report written")
     return 0
+
+
+def _info(args) -> int:
+    """Print what a dataset holds, in the project's words (``ncdump -h`` gives the raw header)."""
+    ds = store.open_sweep(args.dataset)
+    try:
+        lines = _sweep_info(ds) if "box_count" in ds else _cluster_info(ds)
+    finally:
+        ds.close()
+    print("\n".join([f"{args.dataset}: {ds.attrs['title']}", f"  {ds.attrs['source']}, "
+                     f"{ds.attrs['Conventions']}; {ds.attrs['history']}", *lines]))
+    return 0
+
+
+def _sweep_info(ds) -> list:
+    """What ``info`` says of a sweep: spec, axes, counts, statuses, failures, headline D."""
+    fixed = [name for name in _params.PARAMETERS if name in ds.coords and ds[name].ndim == 0]
+    lines = ["spec:", *(f"  {line}" for line in ds.attrs["spec"].rstrip().splitlines()),
+             "axes:", *(f"  {name:<12} {ds.sizes[name]:>4}: {_values(ds[name].values)}"
+                        for name in ds["box_count"].dims),
+             "fixed: " + " ".join(f"{name}={_text(ds[name].values)}" for name in fixed),
+             f"clusters: {ds.sizes['cluster']} stored, {ds.sizes['particle']} particles",
+             "status (clusters at each count):"]
+    for n in ds["n_particles"].values:
+        codes = ds["status"].sel(n_particles=n).values.ravel()
+        counts = np.bincount(codes, minlength=len(store.STATUS_FLAGS))
+        lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(store.STATUS_FLAGS, counts) if k))
+    failed = [task for task in ds.attrs.get("failed_tasks", "").split("; ") if task]
+    lines += [f"failed tasks: {len(failed) or 'none'}", *(f"  {task}" for task in failed)]
+    if "stop_reason" in ds.attrs:
+        lines.append(f"stopped: {ds.attrs['stop_reason']} (target_ci {ds.attrs['target_ci']}, "
+                     f"max_seeds {ds.attrs['max_seeds']})")
+
+    summary = summarise(ds).isel(n_particles=-1)
+    config = list(summary["D_inf"].dims)
+    header = [*config, "N", "seeds", "D", "95% CI", "D_inf"]
+    rows = []
+    for index in np.ndindex(summary["D_inf"].shape):
+        at = summary.isel(dict(zip(config, index)))
+        d_inf = (f"{_number(at['D_inf'])} [{_number(at['D_inf_ci_lo'])}, {_number(at['D_inf_ci_hi'])}]"
+                 if np.isfinite(at["D_inf"]) else f"none: {at['D_inf_reason'].item()}")
+        rows.append([*(_text(at[name].values) for name in config), str(int(at["n_particles"])),
+                     str(int(at["D_seeds"])), _number(at["D"]),
+                     f"[{_number(at['D_ci_lo'])}, {_number(at['D_ci_hi'])}]", d_inf])
+    return [*lines, "headline D at the largest N (ensemble mass-radius, 95% CI over seeds):",
+            *_table(header, rows)]
+
+
+def _cluster_info(ds) -> list:
+    """What ``info`` says of one grown cluster: parameters, particles, status, its own D."""
+    points = store.cluster_points(ds, 0)
+    fit = fit_mass_radius(radius_of_gyration(points))
+    window = f"n in [{fit.range_lo:g}, {fit.range_hi:g}]" if fit.ok else f"not flat: {fit.reason}"
+    return [f"seed: {ds.attrs['seed']}",
+            "parameters: " + " ".join(f"{name}={_text(ds[name].values)}" for name in _params.PARAMETERS),
+            f"particles: {len(points)}, status {store.STATUS_FLAGS[int(ds['status'][0])]}",
+            f"D of this cluster (mass-radius, 95% CI): {_number(fit.D)} "
+            f"[{_number(fit.ci_lo)}, {_number(fit.ci_hi)}], {window}"]
+
+
+def _table(header, rows) -> list:
+    """Rows of text cells as aligned lines, indented under a header."""
+    widths = [max(map(len, column)) for column in zip(header, *rows)]
+    return ["  " + "  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in (header, *rows)]
+
+
+def _values(values) -> str:
+    """An axis's values; consecutive integers as ``first..last``, a long list as a sketch of it."""
+    if values.dtype.kind in "iu" and len(values) > 3 and (np.diff(values) == 1).all():
+        return f"{values[0]}..{values[-1]}"
+    long = len(values) > 8
+    shown = [f"{v:.4g}" if long and values.dtype.kind == "f" else _text(v) for v in values]
+    return ", ".join([*shown[:4], "...", shown[-1]] if long else shown)
+
+
+def _text(value) -> str:
+    """A value as a user writes it on the command line or in a spec."""
+    value = np.asarray(value).item()
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def _number(value) -> str:
+    return f"{float(value):.3f}" if np.isfinite(value) else "n/a"
 
 
 def _bench(args) -> int:

@@ -1,40 +1,78 @@
 """Model parameters: defaults, types and validation.
 
-Every parameter a cluster depends on lives in ``DEFAULTS``; ``resolve`` fills
-in the defaults and raises ``ValueError`` naming the offending parameter.
+Every parameter a cluster depends on lives in ``PARAMETERS``, with its
+default, allowed values and meaning; ``resolve`` fills in the defaults and
+raises ``ValueError`` naming the offending parameter.
 """
 
 from __future__ import annotations
 
 import numbers
-
-DEFAULTS = {
-    "model": "lattice",
-    "dim": 2,
-    "stickiness": 1.0,
-    "neighbours": 0,  # 0 means 2*dim; resolved below
-    "seed_shape": "point",
-    "size": 0,
-    "launch": "circle",
-    "launch_factor": 1.0,
-    "launch_margin": 2.0,
-    "kill_factor": 0.0,
-    "jumps": True,
-    "step": 0.0,
-    "walkers": 1,
-    "max_steps": 0,
-}
-"""Model parameters and their defaults (see DESIGN.md, the model table).
-
-``max_steps`` is the per-cluster budget of walk steps (0: no budget); growth
-stops with status ``step_limit`` when it runs out.
-"""
+from decimal import Decimal, InvalidOperation
+from dataclasses import dataclass
 
 MODELS = ("lattice", "offlattice")
 SEED_SHAPES = ("point", "block", "line")
 LAUNCHES = ("circle", "box")
 STATUSES = ("ok", "boundary", "step_limit", "exhausted", "error")
 """Growth outcomes; the index is the integer code kernels return."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One model parameter as a user reads it.
+
+    Attributes
+    ----------
+    default
+        The value ``resolve`` fills in.
+    values : tuple or str
+        The allowed values: every one (tuple), or their range as a user
+        writes it (str). ``resolve`` is what enforces them.
+    meaning : str
+        One line, a noun phrase: ``grow --help`` and the netCDF
+        ``long_name`` both use it.
+    shown : str, optional
+        The default as a user reads it, where ``default`` is a placeholder
+        that ``resolve`` replaces.
+    """
+
+    default: object
+    values: tuple | str
+    meaning: str
+    shown: str | None = None
+
+
+PARAMETERS = {
+    "model": Parameter("lattice", MODELS, "particle positions: square/cubic lattice sites, or unit-diameter "
+                                          "disks/spheres in continuous space"),
+    "dim": Parameter(2, (2, 3), "dimension of space"),
+    "stickiness": Parameter(1.0, "(0, 1]", "probability to stick at each contact"),
+    "neighbours": Parameter(0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours",
+                            shown="2*dim"),
+    "seed_shape": Parameter("point", SEED_SHAPES, "seed: one particle, a 2**dim block, or a substrate (line "
+                                                  "in 2D, plane in 3D; periodic sides of width size)"),
+    "size": Parameter(0, "0 or an integer >= 8", "box side in lattice spacings (particle diameters off the "
+                                                 "lattice), 0 = unbounded"),
+    "launch": Parameter("circle", LAUNCHES, "release on a circle/sphere of radius launch_factor*r_max + "
+                                            "launch_margin, or uniformly on the box surface (needs size > 0)"),
+    "launch_factor": Parameter(1.0, ">= 1", "launch radius over the cluster's largest radius r_max"),
+    "launch_margin": Parameter(2.0, ">= 1", "launch radius beyond launch_factor*r_max"),
+    "kill_factor": Parameter(0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the "
+                                              "launch circle, none killed"),
+    "jumps": Parameter(True, "true or false", "exact first-passage jumps far from the cluster (true), or "
+                                              "single steps everywhere (false)"),
+    "step": Parameter(0.0, "0 or > 0", "off-lattice step: 0 = move to exact contact, > 0 = standard deviation "
+                                       "of fixed Gaussian steps with overlap checks (can tunnel)"),
+    "walkers": Parameter(1, "an integer >= 1", "walkers at once; more than 1 start uniformly in the box and "
+                                               "move in lockstep, none relaunched"),
+    "max_steps": Parameter(0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
+                                                 "status step_limit when it runs out"),
+}
+"""Every model parameter a cluster depends on (DESIGN.md, the model table)."""
+
+DEFAULTS = {name: p.default for name, p in PARAMETERS.items()}
+"""Model parameters and their defaults, as ``resolve`` fills them in."""
 
 
 def _kind(name, value, kind):
@@ -160,12 +198,39 @@ def coerce(name: str, text: str):
         raise ValueError(f"{name}: expected true or false, got {text!r}")
     if isinstance(default, int):
         try:
-            return int(text)
-        except ValueError:
-            raise ValueError(f"{name}: expected an integer, got {text!r}") from None
+            return integer(text)
+        except ValueError as err:
+            raise ValueError(f"{name}: {err}") from None
     if isinstance(default, float):
         try:
             return float(text)
         except ValueError:
             raise ValueError(f"{name}: expected a number, got {text!r}") from None
     return text
+
+
+_INTEGER_DIGITS = 30
+"""Longest integer ``integer`` expands from exponent notation (far beyond any count)."""
+
+
+def integer(text: str) -> int:
+    """Parse an integer written as digits or as an integral number: ``1e5``, ``1.5e3``.
+
+    Raises
+    ------
+    ValueError
+        For anything else (``2.5``, ``1e5.5``, ``nan``); the caller names
+        the option.
+    """
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = Decimal(text)
+    except InvalidOperation:
+        value = Decimal("NaN")
+    # The digit cap keeps int() from expanding a number like 1e999999999.
+    if not value.is_finite() or value != value.to_integral_value() or value.adjusted() >= _INTEGER_DIGITS:
+        raise ValueError(f"expected an integer, got {text!r}")
+    return int(value)

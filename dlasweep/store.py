@@ -8,10 +8,29 @@ parameters are the ``cluster_<name>`` coordinates on ``cluster``. Every
 model parameter that is not swept is a scalar coordinate, so ``ds["dim"]``
 or ``ds["model"]`` works whether or not it is a sweep axis.
 
-Types on disk: strings (``model``, ``seed_shape``, ``launch``) are netCDF-4
-variable-length strings; booleans (``jumps``) are int8 0/1 with
-``flag_values``/``flag_meanings`` plus xarray's ``dtype = "bool"`` marker, so
-they come back as bool through xarray and read as 0/1 anywhere else.
+CF (checked with cfchecker, CF-1.8):
+
+* ``featureType = "point"``. CF requires a featureType once a count
+  variable (``sample_dimension``) makes the file a ragged array, and offers
+  only point, timeSeries, trajectory, profile and their combinations. A
+  cluster has no time axis, path or vertical profile: its particles are
+  points in space, located by ``x``, ``y`` (``z``), which is what "point"
+  describes. The count variable then groups those points by cluster; CF
+  defines its contiguous ragged layout for the other feature types, and
+  readers that know it (``cluster_points`` here) apply it unchanged.
+* The count variable is 32-bit ``int``, the integer type the CF-1.8 check
+  asks of it (a cluster holds at most ``spec.MAX_PARTICLES`` particles).
+* Strings (``model``, ``seed_shape``, ``launch`` and their ``cluster_``
+  coordinates) are char arrays with a string-length dimension
+  (``string<N>``) and ``_Encoding = "utf-8"``: the CF-1.8 check rejects
+  netCDF-4 variable-length strings, and char arrays read everywhere.
+  xarray and netCDF4-python turn them back into strings. They have a
+  ``long_name`` and no ``units``. A swept string parameter stays a
+  variable named after its dimension, so that xarray selects by it; the
+  checker warns there, as a CF coordinate variable is numeric.
+* Booleans (``jumps``) are int8 0/1 with ``flag_values``/``flag_meanings``
+  plus xarray's ``dtype = "bool"`` marker, so they come back as bool
+  through xarray and read as 0/1 anywhere else.
 """
 
 from __future__ import annotations
@@ -42,18 +61,17 @@ _DESCRIPTIONS = {
     "max_radius": (f"largest distance of a particle from the seed particle, in {_LENGTH}", "1"),
     "wall_time": ("seconds spent growing the cluster to this count", "s"),
     "walk_steps": ("walk steps (or exact jumps) of every walker until this count", "1"),
-    "size": ("box side, 0 = unbounded", "1"),
     "n_particles": ("target number of particles", "1"),
     "seed": ("replicate number (with root_seed and the grid indices it names the random stream)", "1"),
     "scale": (f"box side for box counting, in {_LENGTH}", "1"),
     "cluster_particles": ("number of particles of the cluster", "1"),
     "diffusion_time": ("walk steps (or exact jumps) from release to sticking", "1"),
-    "cluster_size": ("box side of the cluster, 0 = unbounded", "1"),
     "cluster_seed": ("replicate number of the cluster", "1"),
     "D_ci_half_width": ("half-width of the 95% bootstrap confidence interval over seeds of the headline "
                         "(mass-radius) fractal dimension D at the largest particle count", "1"),
     **{a: (f"{a} coordinate of the particle centre, in {_LENGTH}", "1") for a in AXES},
-    **{name: (f"model parameter {name}", "1") for name in _params.DEFAULTS if name != "size"},
+    # Strings have no units.
+    **{name: (p.meaning, None if isinstance(p.default, str) else "1") for name, p in _params.PARAMETERS.items()},
 }
 
 
@@ -102,7 +120,7 @@ def to_dataset(spec, scales, science, cluster_particles, ragged, failed=()) -> x
 
     data = {name: ((*dims, "scale") if name == "box_count" else dims, science[name])
             for name in (*SCIENCE, "wall_time")}
-    data["cluster_particles"] = ("cluster", np.asarray(cluster_particles, np.int64))
+    data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
     data.update({name: ("particle", values) for name, values in ragged.items()})
     attrs = {
         "title": f"dlasweep parameter sweep '{spec.name}': diffusion-limited aggregation clusters",
@@ -154,7 +172,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     coords = {name: ((), value) for name, value in cluster.params.items()}
     coords["cluster_seed"] = ("cluster", np.asarray([seed], np.int64))
     data = {
-        "cluster_particles": ("cluster", np.asarray([len(points)], np.int64)),
+        "cluster_particles": ("cluster", np.asarray([len(points)])),
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
         **{a: ("particle", _positions(points[:, k])) for k, a in enumerate(AXES[: points.shape[1]])},
         "diffusion_time": ("particle", np.asarray(cluster.steps, np.int64)),
@@ -187,6 +205,8 @@ def save(ds: xr.Dataset, path) -> None:
         if name in ds.coords or var.dtype.kind in "biu":
             # Coordinates and counts have no missing values; CF wants no fill there.
             enc["_FillValue"] = None
+        if var.dtype.kind in "OU":
+            enc["dtype"] = "S1"  # a char array: see CF in the module docstring
         encoding[name] = enc
     try:
         ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
@@ -286,20 +306,22 @@ def _positions(column) -> np.ndarray:
 
 
 def _describe(ds: xr.Dataset) -> xr.Dataset:
-    """Give every variable units and long_name, flags their meanings, the file its globals."""
+    """Give every variable its long_name and units, flags their meanings, the file its globals."""
+    ds["cluster_particles"] = ds["cluster_particles"].astype(np.int32)
     for name, var in ds.variables.items():
         key = name if name in _DESCRIPTIONS else name.removeprefix("cluster_")
         long_name, units = _DESCRIPTIONS[key]
-        if name.startswith("cluster_") and key != name and name not in _DESCRIPTIONS:
-            long_name = f"{long_name} of the cluster"
-        var.attrs.update(long_name=long_name, units=units)
+        if key != name:
+            long_name = f"the cluster's {key}: {long_name}"
+        var.attrs.update(long_name=long_name, **({"units": units} if units else {}))
         if name == "status":
             var.attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8),
                              flag_meanings=" ".join(STATUS_FLAGS))
         elif var.dtype == bool:
             var.attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings="false true")
     ds["cluster_particles"].attrs["sample_dimension"] = "particle"
-    ds.attrs = {"Conventions": "CF-1.8", "source": f"dlasweep {__version__}", **ds.attrs}
+    ds.attrs = {"Conventions": "CF-1.8", "featureType": "point", "source": f"dlasweep {__version__}",
+                **ds.attrs}
     return ds
 
 

@@ -1,4 +1,5 @@
-"""The command line: bad input exits 2 with one line and writes nothing; sweeps end to end."""
+"""The command line: bad input exits 2 with one line and writes nothing; help from the parameter table;
+sweeps end to end; what ``info`` tells of a file."""
 
 import contextlib
 import io
@@ -15,16 +16,20 @@ from hypothesis import strategies as st
 
 import dlasweep as dla
 from conftest import TINY_SPEC, files_under, science
-from dlasweep import store
+from dlasweep import cli, store
+from dlasweep.params import PARAMETERS
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
 
 
 @pytest.mark.parametrize("argv, named", [
-    ([], "required"),
     (["frobnicate"], "invalid choice"),
     (["grow", "-o", "a.nc"], "-n"),
     (["grow", "-n", "ten", "-o", "a.nc"], "-n"),
+    (["grow", "-n", "2.5", "-o", "a.nc"], "-n"),
+    (["grow", "-n", "1e5.5", "-o", "a.nc"], "-n"),
+    (["grow", "-n", "1e9", "-o", "a.nc"], "-n"),
+    (["grow", "-n", "10", "--max-steps", "1.5", "-o", "a.nc"], "--max-steps"),
     (["grow", "-n", "0", "-o", "a.nc"], "-n"),
     (["grow", "-n", "10", "-o", "a.txt"], "a.txt"),
     (["grow", "-n", "10", "-o", "missing/a.nc"], "missing"),
@@ -49,6 +54,8 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["report", "spec.toml"], "not a readable netCDF"),
     (["report", "spec.toml", "-o", "missing/report"], "missing"),
     (["report", "one.nc"], "one cluster"),
+    (["info", "absent.nc"], "absent.nc"),
+    (["info", "spec.toml"], "not a readable netCDF"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -61,6 +68,40 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     assert len(err.strip().splitlines()) == 1 and named in err, err
     assert "Traceback" not in err and out == ""
     assert files_under(tmp_path) == before
+
+
+def test_no_command_prints_usage_and_exits_2(run_cli):
+    status, out, err = run_cli()
+    assert status == 2 and out == ""
+    assert err.startswith("usage: dlasweep") and all(c in err for c in ("grow", "sweep", "report", "info", "bench"))
+
+
+def test_grow_help_comes_from_the_parameter_table(run_cli):
+    status, out, _ = run_cli("grow", "--help")
+    assert status == 0
+    text = " ".join(out.split())  # argparse wraps lines
+    assert "model parameter" not in text
+    for name, param in PARAMETERS.items():
+        assert f"--{name.replace('_', '-')}" in text and " ".join(param.meaning.split()) in text, name
+    for name, values in {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}.items():
+        assert f"--{name.replace('_', '-')} {{{values}}}" in text
+    assert "Default: 2*dim." in text and "Allowed: (0, 1]." in text
+
+
+@pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
+def test_n_is_any_integral_number(text, n, run_cli, tmp_path, monkeypatch):
+    asked = []
+
+    def small(n, seed, **params):
+        asked.append(n)
+        return dla.grow(5, seed, **params)
+
+    monkeypatch.setattr(cli, "grow", small)
+    status, _, err = run_cli("grow", "-n", text, "--max-steps", "1e6", "-o", tmp_path / "c.nc")
+    assert status == 0, err
+    assert asked == [n]
+    with store.open_sweep(tmp_path / "c.nc") as ds:
+        assert int(ds["max_steps"]) == 1_000_000
 
 
 def test_grow_writes_the_cluster(run_cli, tmp_path):
@@ -92,8 +133,9 @@ def check_design(ds, spec_text):
     for name in ("cluster_stickiness", "cluster_size", "cluster_seed"):
         assert name in ds.coords and ds[name].dims == ("cluster",)
     for name, var in ds.variables.items():
-        assert var.attrs.get("units") and var.attrs.get("long_name"), name
-    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["source"] == f"dlasweep {dla.__version__}"
+        assert var.attrs.get("long_name") and ("units" in var.attrs) == (var.dtype.kind not in "OU"), name
+    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["featureType"] == "point"
+    assert ds.attrs["source"] == f"dlasweep {dla.__version__}"
     assert ds.attrs["title"] and ds.attrs["history"]
     assert ds.attrs["spec"] == spec_text and ds.attrs["root_seed"] == 12345
     assert ds["status"].attrs["flag_meanings"] == "ok boundary step_limit exhausted error"
@@ -133,6 +175,50 @@ def test_report_of_the_sweep(tiny_sweep, run_cli, tmp_path):
     assert any((tmp_path / "report").glob("*.png"))
 
 
+def test_info_of_a_sweep(tiny_sweep, run_cli):
+    path = tiny_sweep[3] / "tiny.nc"
+    status, out, err = run_cli("info", path)
+    assert status == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0] == f"{path}: dlasweep parameter sweep 'tiny': diffusion-limited aggregation clusters"
+    assert all(f"  {line}".rstrip() in lines for line in TINY_SPEC.splitlines())
+    assert "  n_particles     3: 20, 60, 150" in lines and "  seed            3: 0, 1, 2" in lines
+    assert "clusters: 12 stored" in out and "failed tasks: none" in lines and "stopped:" not in out
+    # Every count accounts for the 12 clusters by status.
+    status_lines = lines[lines.index("status (clusters at each count):") + 1:][:3]
+    assert [line.split(":")[0].strip() for line in status_lines] == ["20", "60", "150"]
+    assert all(sum(int(part.split()[-1]) for part in line.split(":")[1].split(",")) == 12 for line in status_lines)
+    # The headline D of each configuration at the largest N, as summarise gives it.
+    table = lines[lines.index("headline D at the largest N (ensemble mass-radius, 95% CI over seeds):") + 1:]
+    assert table[0].split() == ["stickiness", "size", "N", "seeds", "D", "95%", "CI", "D_inf"]
+    with store.open_sweep(path) as ds:
+        summary = dla.summarise(ds).isel(n_particles=-1)
+    rows = [row.split() for row in table[1:]]
+    assert [(float(r[0]), int(r[1]), int(r[2])) for r in rows] == [
+        (s, n, 150) for s in (1.0, 0.5) for n in (0, 24)]
+    for row, d in zip(rows, summary["D"].values.ravel()):
+        assert row[4] == (f"{d:.3f}" if np.isfinite(d) else "n/a")
+
+
+def test_info_of_a_target_sweep_names_why_it_stopped(tiny_sweep, run_cli, tmp_path):
+    with store.open_sweep(tiny_sweep[3] / "tiny.nc") as ds:
+        half_width = ds["radius_gyration"].isel(n_particles=-1, seed=0, drop=True) / 100
+        store.save(store.record_stop(ds.load(), half_width, 0.01, 12, "max_seeds reached"), tmp_path / "target.nc")
+    status, out, err = run_cli("info", tmp_path / "target.nc")
+    assert status == 0, err
+    assert "stopped: max_seeds reached (target_ci 0.01, max_seeds 12)" in out.splitlines()
+
+
+def test_info_of_a_grown_cluster(run_cli, tmp_path):
+    path = tmp_path / "one.nc"
+    assert run_cli("grow", "-n", "300", "--seed", "2", "--stickiness", "0.5", "-o", path)[0] == 0
+    status, out, err = run_cli("info", path)
+    assert status == 0, err
+    assert "seed: 2" in out and "stickiness=0.5" in out and "neighbours=4" in out
+    assert "particles: 300, status ok" in out
+    assert "D of this cluster (mass-radius, 95% CI): " in out
+
+
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_grow_draws_the_cluster(suffix, run_cli, tmp_path):
     out = tmp_path / f"cluster{suffix}"
@@ -164,6 +250,11 @@ def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_clu
     assert "task-0-0-0: MemoryError: no room" in err and len(err.strip().splitlines()) == 1
     with store.open_sweep(out) as ds:
         assert (ds["status"] == store.STATUS_FLAGS.index("error")).all()
+    status, info, err = run_cli("info", out)
+    assert status == 0, err
+    lines = info.splitlines()
+    assert "  task-0-0-0: MemoryError: no room" in lines[lines.index("failed tasks: 12") + 1:]
+    assert "         150: error 12" in lines
 
 
 def test_resume_with_changed_spec_exits_2(run_cli, write_spec, tmp_path, dask_cluster):
@@ -267,7 +358,7 @@ def option_text(key):
 
 
 @QUICK_PROPERTY
-@given(n=mostly_valid(["1", "40"], ["0", "-3", "x", "1e3"]),
+@given(n=mostly_valid(["1", "40", "4e1"], ["0", "-3", "x", "2.5"]),
        options=st.sets(st.sampled_from([*VALID, "seed", "colour"]), max_size=3).flatmap(
            lambda keys: st.fixed_dictionaries({k: option_text(k) for k in sorted(keys)})))
 def test_generated_grow_arguments_run_or_exit_2(n, options, run_cli, tmp_path_factory):

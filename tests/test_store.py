@@ -1,4 +1,4 @@
-"""The netCDF layer: one round trip of the DESIGN.md layout, atomic writes, bad files."""
+"""The netCDF layer: one round trip of the DESIGN.md layout, CF compliance, atomic writes, bad files."""
 
 import shutil
 import subprocess
@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import dlasweep as dla
 from dlasweep import store
 from dlasweep.grow import Cluster
-from dlasweep.params import resolve
+from dlasweep.params import PARAMETERS, resolve
 from dlasweep.spec import parse_spec
 
 SPEC = """\
@@ -63,6 +64,8 @@ def test_round_trip(saved):
     # Strings and booleans come back as such, and select.
     assert back["model"].dtype.kind in "OU" and back["jumps"].dtype == bool
     assert back["cluster_jumps"].dtype == bool
+    assert list(back["cluster_model"].values[:9:8]) == ["lattice", "offlattice"]
+    assert (back["cluster_model"] == "lattice").sum() == 8 and back["launch"].item() == "circle"
     assert back.sel(model="offlattice", jumps=False)["box_count"].dims == (
         "size", "n_particles", "seed", "scale")
     back.close()
@@ -89,13 +92,61 @@ def test_layout_follows_design(saved):
 def test_readable_without_xarray(saved):
     _, path = saved
     with netCDF4.Dataset(path) as nc:
-        assert nc.Conventions == "CF-1.8" and nc.source.startswith("dlasweep ")
+        assert nc.Conventions == "CF-1.8" and nc.featureType == "point" and nc.source.startswith("dlasweep ")
         assert nc["cluster_particles"].sample_dimension == "particle"
+        assert nc["cluster_particles"].dtype == np.int32
         assert nc["x"].filters()["zlib"]
         for name, var in nc.variables.items():
-            assert var.units and var.long_name, name
+            assert var.long_name and "model parameter" not in var.long_name, name
+            # Strings have no units; everything else does.
+            assert hasattr(var, "units") == (var.dtype != "S1"), name
+        assert nc["stickiness"].long_name == PARAMETERS["stickiness"].meaning
+        assert nc["cluster_model"].long_name == f"the cluster's model: {PARAMETERS['model'].meaning}"
+        # Strings are char arrays with a length dimension; netCDF4 joins them back.
+        for name in ("model", "cluster_model", "seed_shape", "launch"):
+            assert nc[name].dtype == "S1" and nc[name].dimensions[-1].startswith("string"), name
         assert list(nc["model"][:]) == ["lattice", "offlattice"]
         assert list(nc["jumps"][:]) == [1, 0]
+
+
+def cf_errors(path, tables):
+    """ERROR and FATAL messages of cfchecker on ``path``, as ``variable: message`` lines."""
+    try:
+        from cfchecker import cfchecks
+    except (ImportError, OSError):  # cfunits raises OSError without the udunits2 C library
+        pytest.skip("cfchecker (with the udunits2 library) not installed")
+    checker = cfchecks.CFChecker(cfStandardNamesXML=tables["standard_names"], cfAreaTypesXML=tables["area_types"],
+                                 cfRegionNamesXML=tables["regions"], version=cfchecks.CFVersion(), silent=True)
+    results = checker.checker(str(path))
+    found = {"global": results["global"], **results["variables"]}
+    return [f"{name}: {message}" for name, result in found.items()
+            for category in ("FATAL", "ERROR") for message in result[category]]
+
+
+@pytest.fixture
+def cf_tables(tmp_path):
+    """Empty CF name tables: the checker downloads the real ones by default, and the files use none of them."""
+    tables = {"standard_names": "<standard_name_table><version_number>0</version_number>"
+                                "<last_modified>none</last_modified></standard_name_table>",
+              "area_types": "<area_type_table><version_number>0</version_number><date>none</date></area_type_table>",
+              "regions": "<standardized_region_list><version_number>0</version_number><date>none</date>"
+                         "</standardized_region_list>"}
+    for name, text in tables.items():
+        (tmp_path / f"{name}.xml").write_text(f'<?xml version="1.0"?>{text}')
+    return {name: str(tmp_path / f"{name}.xml") for name in tables}
+
+
+def test_cf_checker_finds_no_errors(saved, cf_tables, tmp_path):
+    ds, sweep = saved
+    target = tmp_path / "target.nc"
+    half_width = ds["box_count"].isel(n_particles=-1, seed=0, scale=0, drop=True).astype(float) / 100
+    store.save(store.record_stop(ds.copy(), half_width, 0.01, 64, "max_seeds reached"), target)
+    files = [sweep, target]
+    for name, params in {"lattice": {}, "offlattice-3d": {"model": "offlattice", "dim": 3, "size": 40}}.items():
+        files.append(tmp_path / f"{name}.nc")
+        store.save(store.cluster_dataset(dla.grow(30, 1, **params), seed=1), files[-1])
+    for path in files:
+        assert cf_errors(path, cf_tables) == [], path.name
 
 
 @pytest.mark.skipif(shutil.which("ncdump") is None, reason="ncdump (netcdf-bin) not installed")
