@@ -89,26 +89,40 @@ class Ensemble:
     n: int
 
 
-def _line(u, v):
-    """Least-squares slope of v on u and its standard error from the residuals."""
-    um = u - u.mean()
+def _line(u, v, groups=None):
+    """Least-squares slope of v on u, each group with its own intercept, and its standard error."""
+    if groups is None:
+        groups = np.zeros(len(u), np.int64)
+    else:
+        groups = np.unique(groups, return_inverse=True)[1]
+    size = np.bincount(groups)
+    um = u - (np.bincount(groups, u) / size)[groups]
+    vm = v - (np.bincount(groups, v) / size)[groups]
     sxx = um @ um
-    slope = um @ (v - v.mean()) / sxx
-    residual = v - v.mean() - slope * um
-    stderr = np.sqrt(residual @ residual / (len(u) - 2) / sxx) if len(u) > 2 else np.nan
+    slope = um @ vm / sxx if sxx > 0 else np.nan
+    residual = vm - slope * um
+    dof = len(u) - len(size) - 1
+    stderr = np.sqrt(residual @ residual / dof / sxx) if dof > 0 and sxx > 0 else np.nan
     return slope, stderr
 
 
-def _local_slopes(x, y, u):
-    """Slope of y on x over each complete octave of u: start and end (exclusive) indices, slopes, centres."""
-    ends = np.searchsorted(u, u + _OCTAVE * (1 + 1e-9), side="right")
-    # An octave is complete when its points reach (nearly: counts are whole
-    # numbers) a factor two; the last points of the curve start none.
-    starts = np.flatnonzero((ends - np.arange(len(u)) >= 2) & (u[ends - 1] - u >= 0.95 * _OCTAVE))
-    ends = ends[starts]
-    slopes = np.array([_line(x[a:b], y[a:b])[0] for a, b in zip(starts, ends)])
-    centres = np.array([u[a:b].mean() for a, b in zip(starts, ends)])
-    return starts, ends, slopes, centres
+def _local_slopes(x, y, u, groups):
+    """Slope of y on x over each complete octave of u within a group.
+
+    Returns the first and one past the last index of each octave's points,
+    the slopes and the octaves' centres (mean u).
+    """
+    starts, ends, slopes, centres = [], [], [], []
+    for i in range(len(u)):
+        members = np.flatnonzero((u >= u[i]) & (u <= u[i] + _OCTAVE * (1 + 1e-9)) & (groups == groups[i]))
+        # An octave is complete when its points reach (nearly: counts are
+        # whole numbers) a factor two; the last points of the curve start none.
+        if len(members) >= 2 and u[members[-1]] - u[i] >= 0.95 * _OCTAVE:
+            starts.append(i)
+            ends.append(members[-1] + 1)
+            slopes.append(_line(x[members], y[members])[0])
+            centres.append(u[members].mean())
+    return np.array(starts, np.int64), np.array(ends, np.int64), np.array(slopes), np.array(centres)
 
 
 @dataclass(frozen=True)
@@ -126,9 +140,9 @@ class _Window:
         return float(np.hypot(self.stat, self.drift / 2))
 
 
-def _window(x, y, u, sign, local, a, b, tolerance):
+def _window(x, y, u, groups, sign, local, a, b, tolerance):
     """The fit over points a..b-1 and the flatness of its local slopes."""
-    slope, regression = _line(x[a:b], y[a:b])
+    slope, regression = _line(x[a:b], y[a:b], groups[a:b])
     starts, ends, slopes, centres = local
     inside = (starts >= a) & (ends <= b)
     d, c = sign * slopes[inside], centres[inside]
@@ -147,12 +161,13 @@ def _window(x, y, u, sign, local, a, b, tolerance):
     return _Window(a, b, float(sign * slope), float(stat), float(drift), float(drift_err), bool(flat))
 
 
-def _scaling_fit(x, y, variable, sign, *, min_decades, min_points, flat_tolerance, unit):
+def _scaling_fit(x, y, variable, groups, sign, *, min_decades, min_points, flat_tolerance, unit):
     """Fit ``sign * slope`` of y on x over the widest flat window (module docstring).
 
     ``variable`` (increasing, named ``unit`` in reasons) is the quantity whose
     octaves define the local slopes and whose decades the window must span;
-    the arrays are already restricted to the admissible range.
+    points of one of ``groups`` share an intercept; the arrays are already
+    restricted to the admissible range.
     """
     m = len(x)
 
@@ -166,8 +181,8 @@ def _scaling_fit(x, y, variable, sign, *, min_decades, min_points, flat_toleranc
         return Fit(nan, nan, nan, nan, nan, nan, m, nan, False, f"{m} admissible points, need {max(min_points, 3)}")
     u = np.log(variable)
     decades = (u - u[0]) / np.log(10)
-    local = _local_slopes(x, y, u)
-    whole = _window(x, y, u, sign, local, 0, m, flat_tolerance)
+    local = _local_slopes(x, y, u, groups)
+    whole = _window(x, y, u, groups, sign, local, 0, m, flat_tolerance)
     if decades[-1] < min_decades:
         return result(whole, False, f"admissible range spans {decades[-1]:.2f} decades of {unit}, need {min_decades:g}")
     # Widest first; among equally wide flat windows the most precise wins.
@@ -178,7 +193,7 @@ def _scaling_fit(x, y, variable, sign, *, min_decades, min_points, flat_toleranc
     for a, b in windows:
         if width is not None and u[b - 1] - u[a] < width - 1e-12:
             break
-        w = _window(x, y, u, sign, local, a, b, flat_tolerance)
+        w = _window(x, y, u, groups, sign, local, a, b, flat_tolerance)
         if w.flat and (best is None or w.stderr < best.stderr):
             best, width = w, u[b - 1] - u[a]
     if best is not None:
@@ -230,8 +245,22 @@ def fit_dimension(
     single = np.flatnonzero(n <= 1)
     extent = s[single[0]] if len(single) else s[-1]
     keep = (s >= min_scale) & (s <= max_fraction * extent) & (n > 0)
-    return _scaling_fit(np.log(s[keep]), np.log(n[keep]), s[keep], -1.0, min_decades=min_decades,
+    s, n = s[keep], n[keep]
+    return _scaling_fit(np.log(s), np.log(n), s, _families(s), -1.0, min_decades=min_decades,
                         min_points=min_points, flat_tolerance=flat_tolerance, unit="box side")
+
+
+def _families(scales):
+    """The family of each box side: its odd part for whole sides (b, 2b, 4b, ... share b), else one family.
+
+    Grids of one family nest, so their counts share one prefactor; between
+    families the prefactor jumps on sets commensurate with the lattice
+    (the gasket fills boxes of 2**k exactly, of 3 * 2**k not).
+    """
+    whole = np.round(scales).astype(np.int64)
+    if not np.array_equal(whole, scales):
+        return np.zeros(len(scales), np.int64)
+    return whole // (whole & -whole)
 
 
 def mass_radius_counts(n_max: int, *, start_fraction: float = 0.05, min_count: int = 50,
@@ -301,7 +330,8 @@ def fit_mass_radius(
                                  per_octave=per_octave)
     picks = np.unique(np.clip(np.searchsorted(n, targets), 0, len(n) - 1))
     picks = picks[rg[picks] > 0]
-    return _scaling_fit(np.log(rg[picks]), np.log(n[picks]), n[picks], 1.0, min_decades=min_decades,
+    return _scaling_fit(np.log(rg[picks]), np.log(n[picks]), n[picks], np.zeros(len(picks), np.int64), 1.0,
+                        min_decades=min_decades,
                         min_points=min_points, flat_tolerance=flat_tolerance, unit="N")
 
 
