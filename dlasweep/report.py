@@ -158,7 +158,7 @@ def _headline(row) -> str:
 
 
 def _markdown_table(sweep) -> str:
-    head = [*sweep.config_dims, "N", "status", "D mass-radius (ensemble)", "D box counting (ok fits)",
+    head = [*sweep.config_dims, "N", "status", "D mass-radius (ensemble)", "D box counting (share of flat fits)",
             "D per-seed std", "Rg", "Rg/Rmax", "s/particle"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for row in sweep.rows():
