@@ -24,7 +24,8 @@ from .analysis import summarise
 from .fit import fit_mass_radius
 from .grow import grow
 from .measure import radius_of_gyration
-from .report import draw_cluster, plot_bench, report
+from .pictures import draw_cluster
+from .report import plot_bench, report
 from .spec import MAX_PARTICLES, SpecError, load_spec
 from .sweep import ResumeError, run_sweep
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .analysis import EXACT_METHOD, exact_reference, summarise
+from .pictures import draw_points
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
 """D of DLA: 2D off-lattice 1.7100(3) (Menshutin et al. 2008); 3D about 2.50."""
@@ -228,43 +229,6 @@ def _log_x(ax):
     ax.tick_params(axis="x", which="minor", labelbottom=False)
 
 
-def _draw_points(ax, points, lattice, inches, rasterized=True):
-    """Particles at their true size (an ``inches``-wide panel), coloured by attachment order."""
-    low, high = points[:, :2].min(axis=0) - 1, points[:, :2].max(axis=0) + 1
-    extent = max((high - low).max(), 1.0)
-    centre = (low + high) / 2
-    ax.set_xlim(centre[0] - extent / 2, centre[0] + extent / 2)
-    ax.set_ylim(centre[1] - extent / 2, centre[1] + extent / 2)
-    ax.set_aspect("equal")
-    ax.set_axis_off()
-    points_per_unit = 72 * inches / extent
-    ax.scatter(points[:, 0], points[:, 1], c=np.arange(len(points)), cmap="viridis",
-               s=max(points_per_unit**2, 0.05), marker="s" if lattice else "o", linewidths=0,
-               rasterized=rasterized)
-
-
-def draw_cluster(points, params, path) -> Path:
-    """Draw one cluster, coloured by attachment order, to a PNG or SVG file.
-
-    Parameters
-    ----------
-    points : ndarray, (n, dim)
-        Positions in attachment order; a 3D cluster is projected on x-y.
-    params : dict
-        The cluster's model parameters (``model``, ``dim`` are used).
-    path : str or Path
-        ``.png`` (particles rasterised) or ``.svg`` (every particle a vector shape).
-    """
-    path = Path(path)
-    fig, (ax,) = _figure(1, 6.0, 6.0)
-    _draw_points(ax, np.asarray(points, float), params.get("model", "lattice") == "lattice", 5.6,
-                 rasterized=path.suffix.lower() != ".svg")
-    projected = ", projected on x-y" if params.get("dim", 2) == 3 else ""
-    ax.set_title(f"{params.get('model', 'lattice')} DLA, N={len(points)}{projected}", fontsize=9)
-    _save(fig, path)
-    return path
-
-
 def _gallery(sweep, path):
     shown = [c for c in sweep.configs if sweep.cluster_of(c, 0) is not None][:_MAX_PANELS]
     if not shown:
@@ -277,7 +241,7 @@ def _gallery(sweep, path):
                                                              "n_particles": last, "seed": 0}])]
         ax.set_title(f"{sweep.label(config)}\nN={len(points)}, {status}", fontsize=8)
         if len(points):
-            _draw_points(ax, points.astype(float), sweep.lattice, 3.0)
+            draw_points(ax, points.astype(float), sweep.lattice, 3.0)
         else:
             ax.set_axis_off()
     fig.suptitle("Clusters (seed 0), coloured by attachment order (dark: early)"

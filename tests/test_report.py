@@ -116,7 +116,7 @@ def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
 
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_draw_cluster_writes_a_picture(tmp_path, suffix):
-    from dlasweep.report import draw_cluster
+    from dlasweep.pictures import draw_cluster
 
     c = dla.grow(300, seed=1)
     path = draw_cluster(c.points, c.params, tmp_path / f"cluster{suffix}")
