@@ -10,6 +10,7 @@ dataset has no data for are skipped, never drawn empty.
 from __future__ import annotations
 
 import csv
+import os
 from pathlib import Path
 
 import numpy as np
@@ -605,7 +606,8 @@ def _write_report(sweep, figures, path) -> Path:
     lines += ["## Spec", "", "```toml", str(ds.attrs.get("spec", "")).strip(), "```", ""]
     source = ds.encoding.get("source")
     if source:
-        lines += ["Reproduce this report with", "", f"    dlasweep report {source} -o {path.parent}", ""]
+        lines += ["Reproduce this report with", "",
+                  f"    dlasweep report {os.path.relpath(source)} -o {os.path.relpath(path.parent)}", ""]
     path.write_text("\n".join(lines))
     return path
 
