@@ -64,6 +64,8 @@ _ATTRS = {
     "D_cluster_ok": "whether that cluster's fit is flat (1) or not (0)",
     "D_box_cluster": "box-counting D of one cluster at N",
     "D_box_cluster_ok": "whether that fit is flat (1) or not (0)",
+    "rg_history": "mean radius of gyration over the seeds that reached the largest count, along their growth",
+    "pareto": "on the Pareto front of cost per particle against the bound on |Rg/Rg(exact) - 1| (1) or not (0)",
     "D_local": "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve",
     "D_local_ci_lo": "lower end of the bootstrap 95% band of D_local",
     "D_local_ci_hi": "upper end of the bootstrap 95% band of D_local",
@@ -147,6 +149,10 @@ def _against_exact(sweep, out):
         ref = exact_reference(sweep.ds, sweep.config_dims, config)
         if ref is None:
             continue
+        if ref == config:
+            for name in COMPARED:
+                out[f"{name}_vs_exact"][config] = out[f"{name}_vs_exact_half_width"][config] = 0.0
+            continue
         for name, relative in COMPARED.items():
             stem = "rg" if name == "rg_mean" else name
             value, base = out[name][config], out[name][ref]
@@ -157,6 +163,24 @@ def _against_exact(sweep, out):
             else:
                 out[f"{name}_vs_exact"][config] = value - base
                 out[f"{name}_vs_exact_half_width"][config] = np.hypot(half, base_half)
+    _pareto(sweep, out)
+
+
+def _pareto(sweep, out):
+    """Mark, at each count, the configurations no other beats on both cost and accuracy.
+
+    Accuracy is the bound |Rg/Rg(exact) - 1| + its CI half-width (Rg at equal
+    N separates the methods more sharply than D); the exact method's bound is 0.
+    """
+    cost = out["seconds_per_particle"].reshape(-1, sweep.n_counts)
+    bound = (np.abs(out["rg_mean_vs_exact"]) + out["rg_mean_vs_exact_half_width"]).reshape(-1, sweep.n_counts)
+    front = np.zeros_like(cost)
+    for k in range(sweep.n_counts):
+        c, b = cost[:, k], bound[:, k]
+        for i in np.flatnonzero(np.isfinite(c) & np.isfinite(b)):
+            beaten = (c <= c[i]) & (b <= b[i]) & ((c < c[i]) | (b < b[i]))
+            front[i, k] = not beaten.any()
+    out["pareto"][...] = front.reshape(out["pareto"].shape)
 
 
 class _Sweep:
@@ -176,6 +200,7 @@ class _Sweep:
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
         self.extra = {"n_particles": self.n_counts, "seed": self.n_seeds, "n_local": len(self.octaves),
+                      "n_history": len(self.history),
                       "scale_mid": len(self.scales) - 1, "diffusion_bin": len(self.time_edges) - 1,
                       "depth_bin": len(DEPTH_EDGES) - 1, "status": len(STATUSES)}
         """Sizes of the dims a summary has beside the configuration's."""
@@ -184,7 +209,7 @@ class _Sweep:
                 "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
                 "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
                 "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
-                "steps_per_particle", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
+                "steps_per_particle", "pareto", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
             **{name: ("n_particles", "seed") for name in (
                 "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
                 "D_box_range_hi")},
@@ -192,6 +217,7 @@ class _Sweep:
             "diffusion_density": ("diffusion_bin",),
             "diffusion_median": ("depth_bin",),
             **{name: ("n_local",) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
+            "rg_history": ("n_history",),
             **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
             "status_count": ("n_particles", "status"),
         }
@@ -230,10 +256,11 @@ class _Sweep:
         dims["D_reason"], dims["D_inf_reason"] = base + ("n_particles",), base
         data = {}
         for name, values in out.items():
-            if name.endswith("_ok") or name in ("D_seeds", "status_count"):
+            if name.endswith("_ok") or name in ("D_seeds", "status_count", "pareto"):
                 values = np.nan_to_num(values).astype(np.int64 if name in ("D_seeds", "status_count") else np.int8)
             data[name] = (dims[name], values, {"long_name": _ATTRS[name]})
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
+        coords["n_history"] = self.history
         coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
         coords["status"] = np.array(STATUSES, object)
         coords["scale_mid"] = np.sqrt(self.scales[1:] * self.scales[:-1])
@@ -349,6 +376,8 @@ def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resampl
 def _local(sweep, config, curves, out, rng, resamples):
     """Local slopes of the ensemble curve with their band, and the extrapolation D_inf."""
     o = {name: values[(*config, ...)] for name, values in out.items()}
+    if len(curves):
+        o["rg_history"][:] = curves.mean(axis=0)
     if len(curves) < 2 or len(sweep.octaves) == 0:
         o["D_inf_reason"][()] = "fewer than two clusters reached the largest count"
         return

@@ -72,7 +72,8 @@ class _Sweep:
         self.dim = int(ds["dim"].max()) if "dim" in ds else 2
         self.lattice = bool((ds["model"] == "lattice").all()) if "model" in ds else True
         self.configs = list(np.ndindex(*(ds.sizes[d] for d in self.config_dims)))
-        self.reference = REFERENCE_D.get(self.dim)
+        # Lattice clusters cross over to axis-aligned growth: the off-lattice value is not theirs.
+        self.reference = None if self.lattice else REFERENCE_D.get(self.dim)
 
     def at(self, name, config, **index):
         """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
@@ -333,26 +334,68 @@ def _local_slopes(sweep, path):
 def _dimension_vs_n(sweep, path):
     if not np.isfinite(sweep.s["D"].values).any():
         return None
-    fig, (ax,) = _figure(1, 6.5, 4.2)
-    for c, config in enumerate(sweep.configs[:10]):
+    shown = sweep.configs[:_MAX_PANELS]
+    fig, axes = _figure(len(shown), 4.2, 3.4)
+    n_local = sweep.s["n_local"].values
+    for ax, config in zip(axes, shown):
+        if len(n_local):
+            ax.fill_between(n_local, sweep.at("D_local_ci_lo", config), sweep.at("D_local_ci_hi", config),
+                            color="C0", alpha=0.15, lw=0, label="local slope D_eff(n), 95% band")
+            ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8)
         for e, (name, title) in enumerate(ESTIMATORS):
             mean = sweep.at(name, config)
-            low = mean - sweep.at(f"{name}_ci_lo", config)
-            high = sweep.at(f"{name}_ci_hi", config) - mean
-            x = sweep.counts * (1.04 if e else 1.0)
-            ax.errorbar(x, mean, yerr=[np.nan_to_num(low), np.nan_to_num(high)], color=_colour(c),
-                        marker="os"[e], mfc="none" if e else _colour(c), ls="-:"[e], capsize=2,
-                        label=f"{title}, {sweep.label(config)}")
-    if sweep.reference:
-        ax.axhline(sweep.reference, color="k", ls="--", lw=1, label="off-lattice reference")
-    _log_x(ax)
-    ax.set_xlabel("particles N")
-    ax.set_ylabel("D (95% CI)")
-    ax.set_title("Fractal dimension against cluster size")
-    ax.legend(fontsize=6)
+            err = [np.nan_to_num(mean - sweep.at(f"{name}_ci_lo", config)),
+                   np.nan_to_num(sweep.at(f"{name}_ci_hi", config) - mean)]
+            ax.errorbar(sweep.counts * (1.06 if e else 1.0), mean, yerr=err, color=f"C{3 * e}", marker="os"[e],
+                        mfc="none" if e else f"C{3 * e}", ls="none", capsize=2, label=title)
+        for n, d, seeds in zip(sweep.counts, sweep.at("D", config), sweep.at("D_seeds", config)):
+            if np.isfinite(d):
+                ax.annotate(f"{seeds}", (n, d), fontsize=6, xytext=(0, 6), textcoords="offset points", ha="center")
+        if np.isfinite(sweep.at("D_inf", config)):
+            ax.axhspan(sweep.at("D_inf_ci_lo", config), sweep.at("D_inf_ci_hi", config), color="C2", alpha=0.2,
+                       lw=0, label="D_inf, 95% CI")
+        if sweep.reference:
+            ax.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
+        _log_x(ax)
+        ax.set_title(sweep.label(config), fontsize=8)
+        ax.set_xlabel("particles N")
+        ax.set_ylabel("D")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
+    fig.suptitle("D against cluster size (bars: 95% CI; numbers: clusters in the ensemble)", fontsize=9)
     _save(fig, path)
-    return ("D against N: filled/solid the headline ensemble mass-radius estimate, open/dotted the mean box-counting "
-            "estimate; bars are 95% CIs; the dashed line is the 2D off-lattice reference value.")
+    reference = (f"the dashed line is the {sweep.dim}D off-lattice reference" if sweep.reference
+                 else "no reference line: the off-lattice value is not the lattice model's")
+    return ("One panel per configuration: the headline ensemble mass-radius D at each N (filled) with the number "
+            "of clusters in it, the mean box-counting D (open squares, reads low), the local slope D_eff(n) with "
+            "its band, and D_inf where the extrapolation holds; " + reference + ".")
+
+
+def _mass_radius(sweep, path):
+    history = sweep.s["n_history"].values
+    shown = [c for c in sweep.configs[:_MAX_PANELS] if np.isfinite(sweep.at("rg_history", c)).any()]
+    if not shown:
+        return None
+    fig, axes = _figure(len(shown), 4.2, 3.4)
+    last = len(sweep.counts) - 1
+    for ax, config in zip(axes, shown):
+        rg = sweep.at("rg_history", config)
+        ax.loglog(rg, history, "o", ms=2, color="C0", label="<Rg> over seeds")
+        D, lo, hi = (float(sweep.at(name, config, n_particles=last)) for name in ("D", "D_range_lo", "D_range_hi"))
+        if np.isfinite(D):
+            window = (history >= lo) & (history <= hi)
+            anchor = np.exp(np.mean(np.log(history[window]) - D * np.log(rg[window])))
+            ax.loglog(rg[window], anchor * rg[window] ** D, color="C3", lw=1.5,
+                      label=f"N ~ <Rg>^{D:.3f}, fitted window")
+            ax.axhspan(lo, hi, color="C3", alpha=0.08, lw=0)
+        ax.minorticks_off()
+        ax.set_title(sweep.label(config), fontsize=8)
+        ax.set_xlabel("mean radius of gyration <Rg>")
+        ax.set_ylabel("particles n")
+        ax.legend(fontsize=6, loc="upper left")
+    fig.suptitle(f"Mass against radius, the headline estimator, at N={sweep.counts[last]}", fontsize=9)
+    _save(fig, path)
+    return ("The estimator the report quotes: n against the seed-averaged radius of gyration along the growth, "
+            "log-log, with the line fitted over the window chosen from the data (shaded).")
 
 
 def _dimension_spread(sweep, path):
@@ -410,6 +453,25 @@ def _method_axes(sweep):
     return [a for a in EXACT_METHOD if a in sweep.config_dims and sweep.ds.sizes[a] > 1]
 
 
+_SHORTCUTS = {"kill_factor": "kill circle", "jumps": "single steps", "step": "Gaussian steps", "size": "finite box"}
+"""The name of the shortcut each method axis takes away from the exact method."""
+_MARKERS = "*osD^vP<>Xph"
+_FILLS = ("full", "none", "left", "bottom")
+
+
+def _family(sweep, config, methods) -> str:
+    """The shortcuts a configuration takes, e.g. ``kill circle + single steps``; ``exact`` for none."""
+    taken = [_SHORTCUTS[m] for m in methods
+             if _plain(sweep.ds[m].values[config[sweep.config_dims.index(m)]]) != EXACT_METHOD[m]]
+    return " + ".join(taken) or "exact"
+
+
+def _variant(sweep, config, methods) -> str:
+    """The non-exact method values of a configuration, e.g. ``kill_factor=1.2, step=2.0``."""
+    shown = [m for m in methods if _plain(sweep.ds[m].values[config[sweep.config_dims.index(m)]]) != EXACT_METHOD[m]]
+    return sweep.label(config, shown) if shown else "exact"
+
+
 def _speed_accuracy(sweep, path):
     methods = _method_axes(sweep)
     last = len(sweep.counts) - 1
@@ -417,32 +479,46 @@ def _speed_accuracy(sweep, path):
     pairs = [(c, r) for c, r in pairs if r is not None]
     if not methods or all(c == r for c, r in pairs):
         return None
-    fig, (dev_d, dev_rg) = _figure(2, 5.5, 4.2)
-    groups = {r: g for g, r in enumerate(dict.fromkeys(r for _, r in pairs))}
+    others = [d for d in sweep.config_dims if d not in methods and sweep.ds.sizes[d] > 1]
+    families = list(dict.fromkeys(["exact", *(_family(sweep, c, methods) for c, _ in pairs)]))
+    members = {}
+    fig, (dev_d, dev_rg) = _figure(2, 5.0, 4.4)
     for config, ref in pairs:
         row = sweep.row(config, last)
-        style = dict(color=_colour(groups[ref]), marker="*" if config == ref else "o", ms=9 if config == ref else 5,
-                     mec="C3" if row["flagged"] else None, capsize=2)
-        text = sweep.label(config, methods)
+        family = _family(sweep, config, methods)
+        f = families.index(family)
+        # Variants of one family share colour and marker and differ in fill.
+        fill = _FILLS[members.setdefault(family, []).__len__() % len(_FILLS)]
+        members[family].append(config)
+        label = _variant(sweep, config, methods) + (f" ({sweep.label(config, others)})" if others else "")
+        style = dict(color=_colour(f), marker=_MARKERS[f % len(_MARKERS)], ms=10 if f == 0 else 6, capsize=2,
+                     ls="none", fillstyle=fill, mec="k" if row["pareto"] else _colour(f))
         for ax, name in ((dev_d, "D"), (dev_rg, "rg_mean")):
             y, err = row[f"{name}_vs_exact"], row[f"{name}_vs_exact_half_width"]
             if np.isfinite(y):
-                ax.errorbar(row["seconds_per_particle"], y, yerr=np.nan_to_num(err), **style)
-                ax.annotate(text, (row["seconds_per_particle"], y), fontsize=6, xytext=(3, 3),
-                            textcoords="offset points")
+                ax.errorbar(row["seconds_per_particle"], y, yerr=np.nan_to_num(err), label=label, **style)
             else:
                 _mark_missing(ax, [row["seconds_per_particle"]], [y])
-    for ax, label in ((dev_d, "D(variant) - D(exact), mass-radius"), (dev_rg, "Rg(variant) / Rg(exact) - 1 at equal N")):
+    front = [sweep.row(c, last) for c, _ in pairs if sweep.row(c, last)["pareto"]]
+    front.sort(key=lambda r: r["seconds_per_particle"])
+    if len(front) > 1:
+        dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
+                    color="k", lw=0.8, ls=":", label="Pareto front (cheapest for its accuracy)")
+    for ax, label in ((dev_d, "D(variant) - D(exact), 95% CI"), (dev_rg, "Rg(variant) / Rg(exact) - 1, 95% CI")):
         ax.axhline(0, color="k", lw=0.8)
         _log_x(ax)
         ax.set_xlabel("wall time per particle (s)")
         ax.set_ylabel(label)
-    fig.suptitle(f"Speed against accuracy at N={sweep.counts[last]} "
-                 "(stars: exact method; red edge: flagged; red x: no value)")
+    handles, labels = dev_rg.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", fontsize=6, ncols=3,
+               title="variant (colour and marker: the shortcuts taken; fill: which of them)", title_fontsize=7)
+    fig.suptitle(f"Speed against accuracy at N={sweep.counts[last]}")
     _save(fig, path)
-    return ("Cost per particle against the deviation from the exact method (" + ", ".join(
-        f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count; "
-        "bars combine both 95% CIs in quadrature.")
+    return ("Cost per particle against the departure from the exact method (" + ", ".join(
+        f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count: "
+        "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
+        "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer). Bars "
+        "combine both 95% CIs.")
 
 
 def _verdict(value, half) -> str:
@@ -479,56 +555,56 @@ def _failure(sweep, path):
     if not axes_present:
         return None
     last = len(sweep.counts) - 1
-    fig, panels = _figure(2 * len(axes_present), 4.2, 3.4)
+    fig, panels = _figure(2 * len(axes_present), 4.0, 3.3)
+    base = exact_reference(sweep.ds, sweep.config_dims, sweep.configs[0]) or sweep.configs[0]
     for p, axis in enumerate(axes_present):
-        top, bottom = panels[2 * p], panels[2 * p + 1]
-        others = [d for d in sweep.config_dims if d != axis]
-        series = {}
-        for config in sweep.configs:
-            series.setdefault(tuple(config[sweep.config_dims.index(d)] for d in others), []).append(config)
-        for s, members in enumerate(series.values()):
-            xs, rows = [], []
-            for config in members:
-                row = sweep.row(config, last)
-                x = float(row[axis])
-                if axis == "size":
-                    if x == 0:
-                        top.axhline(row["D"], color=_colour(s), ls=":", lw=1)
-                        continue
-                    x /= max(row["rg_mean"] / row["rg_over_rmax"], 1e-9)
-                xs.append(x)
-                rows.append(row)
-            if not rows:
-                continue
-            xs = np.array(xs)
-            order = np.argsort(xs)
-            xs, rows = xs[order], [rows[i] for i in order]
-            label = sweep.label(members[0], others) if others else None
-            for ax, key, marker in ((top, "D", "o"), (top, "D_box", "s"), (bottom, "rg_over_rmax", "o")):
-                y = np.array([r[key] for r in rows])
-                err = [y - np.array([r[f"{key}_ci_lo"] for r in rows]), np.array([r[f"{key}_ci_hi"] for r in rows]) - y]
-                ax.errorbar(xs, y, yerr=np.nan_to_num(err), color=_colour(s), marker=marker,
-                            mfc="none" if key == "D_box" else _colour(s), capsize=2,
-                            label=(f"{'box' if key == 'D_box' else 'mass-radius'}, {label}" if ax is top else label))
-                flagged = np.array([r["flagged"] for r in rows], bool)
-                ax.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3)
-                _mark_missing(ax, xs, y)
-        xlabel = "box side / cluster radius" if axis == "size" else axis
-        for ax in (top, bottom):
-            ax.set_xlabel(xlabel)
-            # kill_factor and step keep a linear axis: their exact value is 0
-            if axis == "size" and (np.asarray(sweep.ds[axis].values, float) > 0).sum() > 1:
-                _log_x(ax)
-        if sweep.reference:
-            top.axhline(sweep.reference, color="k", ls="--", lw=1)
-        top.set_ylabel("D (95% CI)")
-        top.legend(fontsize=6)
-        bottom.set_ylabel("Rg / R_max (95% CI)")
-    fig.suptitle(f"Where methods fail, at N={sweep.counts[last]} (red rings: flagged; red x: no value)")
+        a = sweep.config_dims.index(axis)
+        exact_value = EXACT_METHOD.get(axis)
+        # One factor at a time: every other axis at the exact method (or its first value).
+        line = [c for c in sweep.configs if all(c[i] == base[i] for i in range(len(c)) if i != a)]
+        exact = [c for c in line if _plain(sweep.ds[axis].values[c[a]]) == exact_value]
+        varied = [c for c in line if c not in exact]
+        for panel, name, label in ((panels[2 * p], "D", "D, mass-radius"), (panels[2 * p + 1], "rg_over_rmax",
+                                                                             "Rg / R_max")):
+            rows = [sweep.row(c, last) for c in varied]
+            xs = np.array([float(r[axis]) for r in rows])
+            if axis == "size":
+                xs = xs / np.array([max(r["rg_mean"] / r["rg_over_rmax"], 1e-9) for r in rows])
+            y = np.array([r[name] for r in rows])
+            err = [np.nan_to_num(y - [r[f"{name}_ci_lo"] for r in rows]),
+                   np.nan_to_num(np.array([r[f"{name}_ci_hi"] for r in rows]) - y)]
+            panel.errorbar(xs, y, yerr=err, color="C0", marker="o", capsize=2, ls="-", label=f"{axis} varied")
+            _mark_missing(panel, xs, y)
+            flagged = np.array([r["flagged"] for r in rows], bool)
+            panel.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3,
+                          label="a cluster stopped early" if flagged.any() else None)
+            if exact:
+                ref = sweep.row(exact[0], last)
+                panel.axhspan(ref[f"{name}_ci_lo"], ref[f"{name}_ci_hi"], color="0.6", alpha=0.3, lw=0,
+                              label=f"exact ({axis}={exact_value}), 95% CI")
+                panel.axhline(ref[name], color="0.4", lw=1)
+                half = (ref[f"{name}_ci_hi"] - ref[f"{name}_ci_lo"]) / 2
+                for x, r in zip(xs, rows):
+                    mine = (r[f"{name}_ci_hi"] - r[f"{name}_ci_lo"]) / 2
+                    units = (r[name] - ref[name]) / np.hypot(half, mine)
+                    if np.isfinite(units):
+                        panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4, -9),
+                                       textcoords="offset points")
+            if name == "D" and sweep.reference:
+                panel.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
+            panel.set_xlabel("box side / cluster radius" if axis == "size" else axis)
+            if axis == "size" and len(xs) > 1:
+                _log_x(panel)
+            panel.set_ylabel(f"{label} (95% CI)")
+            panel.legend(fontsize=6, loc="best")
+    fig.suptitle(f"Where methods fail, at N={sweep.counts[last]}: one parameter varied, the rest exact "
+                 "(numbers: bias in units of the combined 95% CI half-width)")
     _save(fig, path)
-    return ("D and Rg/R_max against the parameters that break the model or its measurement ("
-            + ", ".join(axes_present) + "). Red rings mark configurations where a cluster stopped early; red "
-            "crosses at the bottom mark configurations with no value at all.")
+    return ("D and Rg/R_max against each parameter that breaks the model or its measurement ("
+            + ", ".join(axes_present) + "), the others held at the exact method. The grey band is the exact "
+            "method's value with its 95% CI (kill_factor 0 is an infinite kill radius and size 0 an unbounded "
+            "box, so they are drawn as bands, not points); each point is labelled with its bias in units of the "
+            "combined CI half-width: beyond +-1 the bias is resolved.")
 
 
 _PLOTS = {
@@ -536,6 +612,7 @@ _PLOTS = {
     "box_counts": _box_counts,
     "local_slopes": _local_slopes,
     "dimension_vs_n": _dimension_vs_n,
+    "mass_radius": _mass_radius,
     "dimension_spread": _dimension_spread,
     "diffusion_times": _diffusion_times,
     "speed_accuracy": _speed_accuracy,

@@ -77,7 +77,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
     return ds
 
 
-ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png",
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png", "mass_radius.png",
           "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
 
 
@@ -137,3 +137,91 @@ def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
     path = plot_bench(ds, tmp_path / "bench")
     assert path == tmp_path / "bench" / "bench.png"
     assert path.read_bytes().startswith(b"\x89PNG")
+
+
+THIRTY = """
+[grid]
+n_particles = [60, 120]
+seeds = 3
+[model]
+model = "offlattice"
+kill_factor = [0.0, 1.2, 1.5, 2.0, 3.0]
+jumps = [true, false]
+step = [0.0, 0.5, 1.0]
+[run]
+root_seed = 3
+"""
+
+
+@pytest.fixture(scope="module")
+def thirty_variants(dask_client):
+    from dlasweep.spec import parse_spec
+
+    return dla.run_sweep(parse_spec(THIRTY), client=dask_client)
+
+
+def drawn(monkeypatch, plot, ds, tmp_path):
+    """Run one plot of the report and return its Figure instead of only a file."""
+    import importlib
+
+    module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
+    figures = []
+    monkeypatch.setattr(module, "_save", lambda fig, path: figures.append(fig) or fig.savefig(path))
+    caption = plot(module._Sweep(ds), tmp_path / "plot.png")
+    assert caption and (tmp_path / "plot.png").stat().st_size > 0
+    (fig,) = figures
+    fig.canvas.draw()
+    return fig
+
+
+def overlaps(a, b):
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, monkeypatch, tmp_path):
+    from dlasweep.report import _speed_accuracy
+
+    fig = drawn(monkeypatch, _speed_accuracy, thirty_variants, tmp_path)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(panels) == 2
+    # Every variant is a point with an error bar in each panel, named in one legend, not by labels on the data.
+    for ax in panels:
+        assert len(ax.containers) == 30 and not ax.texts
+    (legend,) = fig.legends
+    names = [t.get_text() for t in legend.get_texts()]
+    assert len([n for n in names if not n.startswith("Pareto")]) == 30 and len(set(names)) == len(names)
+    box = legend.get_window_extent()
+    assert not any(overlaps(box, ax.get_window_extent()) for ax in panels)
+    # One marker and colour per set of shortcuts: exact, then the seven combinations.
+    markers = {(c.lines[0].get_marker(), c.lines[0].get_color()) for c in panels[0].containers}
+    assert len(markers) == 8
+
+
+def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_variants, monkeypatch, tmp_path):
+    from dlasweep.report import _failure
+
+    fig = drawn(monkeypatch, _failure, thirty_variants, tmp_path)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_xlabel() for ax in panels] == ["kill_factor"] * 2 + ["step"] * 2
+    for ax in panels:
+        (series,) = ax.containers
+        xs = series.lines[0].get_xdata()
+        assert 0.0 not in xs and len(xs) in (2, 4)  # the non-exact values only
+        assert series.has_yerr
+        assert any("exact" in t.get_text() for t in ax.get_legend().get_texts())
+        # The bias of every point in units of the CI is written beside it.
+        assert len(ax.texts) == len(xs)
+
+
+def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_path):
+    from dlasweep.report import _dimension_vs_n, _mass_radius
+
+    ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=3)
+    fig = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_title() for ax in panels] == ["stickiness=1.0", "stickiness=0.5", "stickiness=0.2"]
+    assert all(ax.get_legend() is None for ax in panels) and len(fig.legends) == 1
+    # Lattice clusters get no off-lattice reference line.
+    assert not any(line.get_linestyle() == "--" for ax in panels for line in ax.get_lines())
+    fig = drawn(monkeypatch, _mass_radius, ds, tmp_path)
+    assert len([ax for ax in fig.axes if ax.get_visible()]) == 3
