@@ -69,7 +69,7 @@ PARAMETERS = {
     "max_steps": Parameter(0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
                                                  "status step_limit when it runs out"),
 }
-"""Every model parameter a cluster depends on (DESIGN.md, the model table)."""
+"""Every model parameter a cluster depends on (README, "The model")."""
 
 DEFAULTS = {name: p.default for name, p in PARAMETERS.items()}
 """Model parameters and their defaults, as ``resolve`` fills them in."""

@@ -195,7 +195,7 @@ def load_spec(path) -> Spec:
     Parameters
     ----------
     path : str or Path
-        A TOML file (see DESIGN.md, "Sweep spec").
+        A TOML file (see README, "Sweep spec").
 
     Returns
     -------

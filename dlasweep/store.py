@@ -1,6 +1,6 @@
 """The netCDF side of dlasweep: dataset layout, atomic writes, reading back.
 
-Layout (DESIGN.md, "Dataset"): the measured quantities on dims
+Layout (README, "The dataset"): the measured quantities on dims
 ``(<swept params>..., size, n_particles, seed[, scale])``; the clusters as a
 CF contiguous ragged array, ``x``, ``y`` (``z``) and ``diffusion_time`` along
 ``particle`` with the count variable ``cluster_particles(cluster)``, whose
@@ -80,7 +80,7 @@ class StoreError(ValueError):
 
 
 def to_dataset(spec, scales, science, cluster_particles, ragged, failed=()) -> xr.Dataset:
-    """Assemble a sweep's results into the DESIGN.md layout.
+    """Assemble a sweep's results into the layout of README, "The dataset".
 
     Parameters
     ----------

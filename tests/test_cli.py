@@ -117,7 +117,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
 
 
 def check_design(ds, spec_text):
-    """The dataset as DESIGN.md names it, for the tiny spec."""
+    """The dataset as the README names it, for the tiny spec."""
     assert ds["box_count"].dims == ("stickiness", "size", "n_particles", "seed", "scale")
     for name in ("n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps"):
         assert ds[name].dims == ("stickiness", "size", "n_particles", "seed"), name

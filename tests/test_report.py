@@ -18,7 +18,7 @@ STATUSES = "ok boundary step_limit exhausted error".split()
 
 
 def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
-    """A dataset with the DESIGN.md layout, grown and measured here, not by run_sweep."""
+    """A dataset with the layout of README, "The dataset", grown and measured here, not by run_sweep."""
     scales = default_scales(counts[-1])
     shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
     science = {

@@ -1,4 +1,4 @@
-"""The netCDF layer: one round trip of the DESIGN.md layout, CF compliance, atomic writes, bad files."""
+"""The netCDF layer: one round trip of the dataset layout (README, "The dataset"), CF compliance, atomic writes, bad files."""
 
 import shutil
 import subprocess
