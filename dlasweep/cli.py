@@ -24,7 +24,7 @@ from .analysis import summarise
 from .fit import fit_mass_radius
 from .grow import grow
 from .measure import radius_of_gyration
-from .pictures import draw_cluster
+from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
 from .report import plot_bench, report
 from .spec import MAX_PARTICLES, SpecError, load_spec
 from .sweep import ResumeError, run_sweep
@@ -86,6 +86,12 @@ def _parser() -> argparse.ArgumentParser:
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
     one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
+    look = one.add_argument_group("pictures (.png, .svg)")
+    look.add_argument("--size-inches", type=float, metavar="W",
+                      help=f"side of the square picture in inches (default {DEFAULT_INCHES:g})")
+    look.add_argument("--dpi", type=float, help=f"dots per inch (default: whole pixels per lattice site, a panel "
+                                                f"at least {PANEL_PIXELS} and the picture at most {MAX_PIXELS} "
+                                                f"pixels wide)")
     one.set_defaults(handler=_grow)
 
     many = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
@@ -143,6 +149,15 @@ def _grow(args) -> int:
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
         raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
+    picture = {"inches": DEFAULT_INCHES if args.size_inches is None else args.size_inches, "dpi": args.dpi}
+    if out.suffix.lower() == ".nc" and (args.size_inches, args.dpi) != (None, None):
+        raise UsageError(f"{'--dpi' if args.size_inches is None else '--size-inches'}: applies to pictures "
+                         f"(.png, .svg), not to {out}")
+    try:
+        check_size(**picture)
+    except ValueError as err:
+        name, _, reason = str(err).partition(":")  # the message starts with the argument's name
+        raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
 
     cluster = grow(args.n, args.seed, **given)
     if cluster.status != "ok":
@@ -150,7 +165,7 @@ def _grow(args) -> int:
     if out.suffix.lower() == ".nc":
         store.save(store.cluster_dataset(cluster, args.seed), out)
     else:
-        draw_cluster(cluster.points, cluster.params, out)
+        draw_cluster(cluster.points, cluster.params, out, seed=args.seed, status=cluster.status, **picture)
     print(f"{out}: {cluster.n} particles")
     return 0
 

@@ -1,0 +1,139 @@
+"""Pictures of one cluster: pixel sizes as asked, lattice sites without gaps, three views in 3D, the box
+and substrate drawn, the parameters in the title, bad picture options refused."""
+
+import numpy as np
+import pytest
+from matplotlib import colormaps
+from matplotlib.image import imread
+
+import dlasweep as dla
+from conftest import files_under
+from dlasweep.pictures import cluster_figure, describe, draw_cluster, draw_points
+
+
+def png_size(path):
+    """Width and height from the PNG header (IHDR)."""
+    head = path.read_bytes()[:24]
+    assert head.startswith(b"\x89PNG\r\n\x1a\n")
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def block(side, dim=2):
+    """Every site of a cube of ``side`` sites, in a scrambled attachment order."""
+    sites = np.stack(np.meshgrid(*[np.arange(side)] * dim, indexing="ij"), axis=-1).reshape(-1, dim)
+    return np.random.default_rng(0).permutation(sites)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_png_has_the_requested_pixel_size(dim, tmp_path):
+    c = dla.grow(200, seed=1, dim=dim)
+    path = draw_cluster(c.points, c.params, tmp_path / "c.png", inches=5, dpi=200)
+    assert png_size(path) == (1000, 1000)
+    assert png_size(draw_cluster(c.points, c.params, tmp_path / "d.png", inches=7.3, dpi=137)) == (1000, 1000)
+
+
+def test_default_resolution_fits_the_cluster(tmp_path):
+    small, large = dla.grow(100, seed=1), dla.grow(100_000, seed=1)
+    width, _ = png_size(draw_cluster(small.points, small.params, tmp_path / "s.png"))
+    assert 1000 < width <= 4000
+    assert png_size(draw_cluster(large.points, large.params, tmp_path / "l.png"))[0] > 1500  # not 660
+
+
+@pytest.mark.parametrize("side, inches, dpi", [(40, 6, None), (40, 6, 100), (37, 3, 77), (400, 2, 100)])
+def test_lattice_sites_are_drawn_without_gaps(side, inches, dpi, tmp_path):
+    path = draw_cluster(block(side), {}, tmp_path / "block.png", inches=inches, dpi=dpi)
+    image = imread(path)[..., :3]
+    # The block is where the picture has colour (the title is black, the background white).
+    rows, cols = np.nonzero(np.ptp(image, axis=-1) > 0.05)
+    inside = image[rows.min() + 1:rows.max(), cols.min() + 1:cols.max()].reshape(-1, 3)
+    # Every pixel inside shows a site's own colour, none blended with the white behind (a seam).
+    shades = np.unique(inside, axis=0)
+    lut = colormaps["viridis"](np.linspace(0.0, 1.0, 256))[:, :3]
+    assert len(shades) and (np.abs(shades[:, None] - lut).max(axis=-1).min(axis=1) <= 2.5 / 255).all()
+    if dpi is None:  # the default: every site the same whole number of pixels
+        assert (cols.max() + 1 - cols.min()) % side == 0 and rows.max() - rows.min() == cols.max() - cols.min()
+
+
+def test_3d_draws_three_views_and_nearer_particles_cover_farther_ones():
+    # Two particles above one another: the first attached (purple) is nearer the top view's viewer.
+    points = np.array([[0, 0, 5], [0, 0, 0], [3, 0, 0]])
+    fig = cluster_figure(points, {"dim": 3})
+    top, side_xz, side_yz = fig.axes
+    assert len(fig.axes) == 3
+    assert top.get_xlim() == side_xz.get_xlim() and side_xz.get_ylim() == side_yz.get_ylim()
+    image = top.images[0]
+    x0, x1, y0, _ = image.get_extent()
+    pixels = image.get_array()
+    block = (x1 - x0) / pixels.shape[1]  # sites per pixel
+    shown = pixels[int(-y0 // block), int(-x0 // block)]  # the pixel of site (0, 0)
+    np.testing.assert_allclose(shown, np.array(colormaps["viridis"](0.0)) * 255, atol=1)  # the nearest: no fog
+
+
+def gids(ax):
+    return {artist.get_gid() for artist in ax.get_children()} - {None}
+
+
+@pytest.mark.parametrize("model", ["lattice", "offlattice"])
+def test_box_and_substrate_are_drawn(model):
+    box = cluster_figure(dla.grow(50, seed=1, model=model, size=40).points, {"model": model, "size": 40})
+    assert gids(box.axes[0]) == {"box"}
+    (wall,) = [a for a in box.axes[0].patches if a.get_gid() == "box"]
+    assert wall.get_width() == 40 and wall.get_x() == (-20.5 if model == "lattice" else -20.0)
+
+    line = {"model": model, "seed_shape": "line", "size": 32}
+    flat = cluster_figure(dla.grow(50, seed=1, **line).points, line)
+    assert gids(flat.axes[0]) == {"substrate", "periodic"}
+    roofed = {**line, "dim": 3, "launch": "box"}
+    top, side_xz, side_yz = cluster_figure(dla.grow(50, seed=1, **roofed).points, roofed).axes
+    assert gids(top) == {"substrate"} and gids(side_xz) == gids(side_yz) == {"substrate", "periodic", "ceiling"}
+
+
+def test_title_names_the_parameters_that_differ_from_their_defaults():
+    c = dla.grow(30, seed=7, stickiness=0.3, jumps=False)
+    (title,) = [t.get_text() for t in cluster_figure(c.points, c.params, seed=7).texts]
+    assert "lattice DLA in 2D, N = 30, seed 7" in title and "stickiness=0.3, jumps=false" in title
+    assert "launch" not in title and "neighbours" not in title
+    assert describe({"dim": 3}, 10) == ("lattice DLA in 3D, N = 10", [])  # 6 neighbours is 3D's default
+    assert describe({"neighbours": 8}, 10, status="boundary")[1] == ["neighbours=8"]
+    assert "stopped: boundary" in describe({}, 10, status="boundary")[0]
+
+
+def test_the_report_gallery_call_still_draws():
+    from matplotlib.figure import Figure
+
+    for dim in (2, 3):
+        ax = Figure().subplots()
+        draw_points(ax, block(10, dim).astype(float), True, 3.0)
+        assert len(ax.images) == 1
+        ax = Figure().subplots()
+        draw_points(ax, block(10, dim).astype(float), False, 3.0)
+        assert len(ax.collections) == 1
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["--dpi", "5"], "--dpi"),
+    (["--dpi", "many"], "--dpi"),
+    (["--dpi", "nan"], "--dpi"),
+    (["--size-inches", "0"], "--size-inches"),
+    (["--size-inches", "100"], "--size-inches"),
+    (["--size-inches", "10", "--dpi", "2000"], "--dpi"),
+])
+def test_bad_picture_options_exit_2_naming_them(argv, named, run_cli, tmp_path):
+    status, out, err = run_cli("grow", "-n", "20", *argv, "-o", tmp_path / "c.png")
+    assert status == 2 and out == "" and len(err.strip().splitlines()) == 1 and named in err, err
+    status, _, err = run_cli("grow", "-n", "20", "--dpi", "100", "-o", tmp_path / "c.nc")
+    assert status == 2 and "--dpi" in err and ".png" in err
+    assert files_under(tmp_path) == set()
+
+
+def test_grow_draws_the_size_asked_and_svg_still_works(run_cli, tmp_path):
+    status, _, err = run_cli("grow", "-n", "200", "--size-inches", "4", "--dpi", "150", "-o", tmp_path / "c.png")
+    assert status == 0, err
+    assert png_size(tmp_path / "c.png") == (600, 600)
+    status, _, err = run_cli("grow", "-n", "200", "--model", "offlattice", "--dim", "3", "-o", tmp_path / "c.svg")
+    assert status == 0, err
+    text = (tmp_path / "c.svg").read_text()
+    assert "<svg" in text and "<image" not in text and text.count("<use") >= 3 * 2 * 200  # a body and a cap each
+    status, _, err = run_cli("grow", "-n", "200", "-o", tmp_path / "l.svg")
+    assert status == 0, err
+    assert "<image" in (tmp_path / "l.svg").read_text()  # the lattice: its image, a pixel per site or more
