@@ -94,14 +94,84 @@ def test_box_counts_of_sets_too_wide_for_a_bitmap_match_reference(spread, lattic
 
 
 @pytest.mark.parametrize("cap", [0, 1 << 10, 1 << 14, 1 << 18])
+@pytest.mark.parametrize("lattice", [True, False])
 @pytest.mark.parametrize("dim", [2, 3])
-def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, cap):
-    # Cap 0 sorts every grid; the others let bitmaps in from some side on and
-    # keep a side's grids for halving from a larger side on.
-    points = random_set(dim, False, 2000 if dim == 2 else 500, 120 if dim == 2 else 24, 7)
-    expected = box_counts(points, lattice=False)
+def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, lattice, cap):
+    # Cap 0 sorts every grid; the others let bitmaps in from some side on
+    # (strips of sites among them) and keep a side's grids for halving from
+    # a larger side on.
+    points = random_set(dim, lattice, 2000 if dim == 2 else 500, 120 if dim == 2 else 24, 7)
+    expected = box_counts(points, lattice=lattice)
     monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
-    np.testing.assert_array_equal(box_counts(points, lattice=False), expected)
+    np.testing.assert_array_equal(box_counts(points, lattice=lattice), expected)
+
+
+ROUTES = {
+    # How the sides counted from the particles are counted: the settings that
+    # force it, and the kernel (name, test on its arguments) whose call shows it ran.
+    "strips of sites": ({}, ("_mark_sites", lambda args: True)),
+    "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, ("_mark_boxes", lambda args: len(args[6]) > 1)),
+    "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12},
+                              ("_mark_boxes", lambda args: args[5] > 0 and len(args[6]) > 0)),
+    "boxes sorted": ({"_BITMAP_CAP": 0}, ("_mark_boxes", lambda args: len(args[6]) == 0)),
+}
+
+
+@pytest.mark.parametrize(
+    "kind, route",
+    [(kind, route) for kind in ("sites", "centres", "disks") for route in ROUTES
+     if kind == "sites" or route != "strips of sites"],  # only integer sites are put in strips
+)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_every_route_from_the_particles_matches_reference(monkeypatch, dim, kind, route):
+    # Lattice sites (integers), lattice points anywhere, disks: each route
+    # against the rule, on the bases counted from the particles and on the
+    # sides halved from them (or, where those do not fit, counted likewise).
+    lattice = kind != "disks"
+    points = random_set(dim, kind == "sites", 200 if lattice else 60, 40 if dim == 2 else 16, dim)
+    settings, (kernel, took) = ROUTES[route]
+    for name, value in settings.items():
+        monkeypatch.setattr(measure, name, value)
+    calls = []
+    run = getattr(measure, kernel)
+    monkeypatch.setattr(measure, kernel, lambda *args: calls.append(args) or run(*args))
+    scales, counts = box_counts(points, lattice=lattice)
+    assert any(took(args) for args in calls), "the route did not run"
+    offsets = reference_offsets(scales)
+    np.testing.assert_array_equal(counts, [slow_box_count(points, s, lattice, offsets[int(s)]) for s in scales])
+
+
+def occupied(stack, shape):
+    """Each grid's occupied boxes (rows of box indices, sorted) from its bitmap in ``stack``."""
+    bits = np.unpackbits(stack.view(np.uint8), axis=-1, bitorder="little")[..., : shape[-1]]
+    return [np.argwhere(grid.reshape(tuple(shape))) for grid in bits]
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(dim, lattice):
+    # Grid by grid, not only the least count, on sets wide enough for rows of
+    # several words (bits move between words when a halved grid is shifted).
+    points = random_set(dim, lattice, 3000 if dim == 2 else 6000, 300 if dim == 2 else 70, 11)
+    points = points - points.min(axis=0)
+    high, radius = points.max(axis=0), 0.0 if lattice else 0.5
+    offsets = {s: sorted(o) for s, o in reference_offsets([1, 2, 4, 3, 6, 12]).items()}
+
+    def marked(side):
+        # Floating-point coordinates are never put in strips.
+        _, stack, shape = measure._from_points(points.astype(float), high, offsets[side], side, radius, keep=True)
+        return occupied(stack, shape)
+
+    for base in (1, 3):
+        count, stack, shape = measure._from_points(points, high, offsets[base], base, radius, keep=True)
+        for side in (base, 2 * base, 4 * base):
+            if side > base:
+                count, stack, shape = measure._halve(stack, shape, offsets[side // 2], side, offsets[side])
+            expected = marked(side)
+            assert len(occupied(stack, shape)) == len(expected) == len(offsets[side]) ** dim
+            for got, want in zip(occupied(stack, shape), expected):
+                np.testing.assert_array_equal(got, want)
+            assert count == min(len(boxes) for boxes in expected)
 
 
 def ternary(level, dim, keep):
@@ -230,6 +300,19 @@ def test_offlattice_particle_counts_in_every_box_its_disk_overlaps(where, lattic
     for lattice, expected in ((True, lattice_count), (False, offlattice_count)):
         _, counts = box_counts(points, lattice=lattice, scales=[2.0], offsets=1)
         assert counts[0] == expected
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_disk_at_exactly_half_a_unit_from_a_corner_only_touches_it(dim):
+    # Side 2 from -0.5: box edges at 1.5. From (1.2089..., 1.0934...) the
+    # squared distances to the corner (edge in 3D) add to 0.25 exactly in
+    # floating point, in the rule's order: touching, no overlap. The next
+    # float nearer the corner overlaps that box too.
+    x, y = 1.2089114938035637, 1.093468966055078
+    for near, expected in ((y, 3), (np.nextafter(y, 2.0), 4)):
+        points = np.array([(0.0, 0.0, 0.0), (x, near, 0.8)])[:, :dim]
+        assert box_counts(points, lattice=False, scales=[2.0], offsets=1)[1][0] == expected
+        assert slow_box_count(points, 2, False, [0]) == expected
 
 
 def test_sphere_touches_face_neighbours_but_not_edges_or_corners():
