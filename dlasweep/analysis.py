@@ -81,6 +81,9 @@ _ATTRS = {
     "rg_over_rmax": "mean of Rg / R_max over the seeds that reached N",
     "rg_over_rmax_ci_lo": "lower end of the bootstrap 95% CI of rg_over_rmax",
     "rg_over_rmax_ci_hi": "upper end of the bootstrap 95% CI of rg_over_rmax",
+    "anisotropy": "mean over the seeds that reached N of the cubic anisotropy of the outer half of the mass",
+    "anisotropy_ci_lo": "lower end of the bootstrap 95% CI of anisotropy",
+    "anisotropy_ci_hi": "upper end of the bootstrap 95% CI of anisotropy",
     "seconds_per_particle": "mean wall time per particle to grow to N",
     "steps_per_particle": "mean walk steps per particle to grow to N",
     "status_count": "clusters with each growth status at N",
@@ -208,7 +211,8 @@ class _Sweep:
             **{name: ("n_particles",) for name in (
                 "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
                 "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
-                "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "seconds_per_particle",
+                "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "anisotropy",
+                "anisotropy_ci_lo", "anisotropy_ci_hi", "seconds_per_particle",
                 "steps_per_particle", "pareto", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
             **{name: ("n_particles", "seed") for name in (
                 "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
@@ -288,6 +292,9 @@ def _config(sweep, config, out, resamples):
     at = {d: i for d, i in zip(sweep.config_dims, config)}
     cell = {name: ds[name][at].values for name in (
         "n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps", "box_count")}
+    # Files written before the anisotropy was measured have none.
+    cell["anisotropy"] = (ds["anisotropy"][at].values if "anisotropy" in ds
+                          else np.full_like(cell["max_radius"], np.nan))
     scales = ds["scale"].values
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]
     grid = np.unique(np.concatenate([sweep.history, *needed]))
@@ -344,11 +351,10 @@ def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resampl
         o["steps_per_particle"][k] = np.mean(cell["walk_steps"][k][alive] / grown[alive])
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = cell["radius_gyration"][k] / cell["max_radius"][k]
-    for name, values in (("rg", cell["radius_gyration"][k]), ("rg_over_rmax", ratio)):
+    for stem, mean, values in (("rg", "rg_mean", cell["radius_gyration"][k]), ("rg_over_rmax", "rg_over_rmax", ratio),
+                               ("anisotropy", "anisotropy", cell["anisotropy"][k])):
         stats = ensemble(np.where(reached, values, np.nan), resamples=resamples)
-        prefix = "rg_" if name == "rg" else "rg_over_rmax_"
-        o["rg_mean" if name == "rg" else name][k] = stats.mean
-        o[prefix + "ci_lo"][k], o[prefix + "ci_hi"][k] = stats.ci_lo, stats.ci_hi
+        o[mean][k], o[f"{stem}_ci_lo"][k], o[f"{stem}_ci_hi"][k] = stats.mean, stats.ci_lo, stats.ci_hi
     box = ensemble(np.where(reached, o["D_box_cluster"][k], np.nan), resamples=resamples)
     o["D_box"][k], o["D_box_ci_lo"][k], o["D_box_ci_hi"][k] = box.mean, box.ci_lo, box.ci_hi
     if reached.any():

@@ -508,6 +508,46 @@ def max_radius(points) -> np.ndarray:
     return np.maximum.accumulate(_seed_distances(points))
 
 
+def anisotropy(points, counts) -> np.ndarray:
+    """Square/cubic anisotropy of the outer half of the mass about the seed, at each count.
+
+    For the particles of the first m whose distance from the seed (the first
+    point) is at least the median distance, the mean of
+    ``(sum_a u_a**4 - c) / (1 - c)`` over their unit directions u, with
+    ``c = 3 / (dim + 2)`` its mean over isotropic directions. In 2D this is
+    <cos 4 theta>: 1 when the mass lies along the axes, -1 along the
+    diagonals, 0 for an isotropic cluster; in 3D the cubic harmonic scaled
+    the same way (1 along the axes, -2/3 along the body diagonals). Square-
+    lattice DLA grows arms along the axes; off-lattice DLA stays near 0.
+
+    Parameters
+    ----------
+    points : array_like, (n, dim)
+        Positions in attachment order.
+    counts : array_like of int
+        Prefix lengths m, each in 1..n.
+
+    Returns
+    -------
+    ndarray of float64, shaped like ``counts``; NaN for a prefix with no particle off the seed.
+    """
+    p = np.asarray(points, dtype=np.float64)
+    counts = np.asarray(counts, dtype=np.int64)
+    if p.ndim != 2 or len(p) == 0 or counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
+        raise ValueError(f"points, counts: expected a non-empty (n, dim) array and counts in 1..n")
+    offset = p - p[0]
+    r2 = (offset**2).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quartic = (offset**4).sum(axis=1) / r2**2
+    isotropic = 3.0 / (p.shape[1] + 2)
+    out = np.full(counts.shape, np.nan)
+    for i, m in np.ndenumerate(counts):
+        outer = r2[1:m] >= np.median(r2[1:m]) if m > 1 else np.zeros(0, bool)
+        if outer.any():
+            out[i] = (quartic[1:m][outer].mean() - isotropic) / (1 - isotropic)
+    return out
+
+
 def mass_within(points, radii) -> np.ndarray:
     """N(r): number of particles whose centre lies within r of the seed (first point).
 

@@ -49,7 +49,7 @@ STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
 
 AXES = ("x", "y", "z")
-SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "walk_steps")
+SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
 _LENGTH = "lattice spacings (lattice) or particle diameters (offlattice)"
@@ -59,6 +59,8 @@ _DESCRIPTIONS = {
     "status": ("growth outcome at this count", "1"),
     "radius_gyration": (f"radius of gyration, in {_LENGTH}", "1"),
     "max_radius": (f"largest distance of a particle from the seed particle, in {_LENGTH}", "1"),
+    "anisotropy": ("cubic anisotropy of the outer half of the mass about the seed: <cos 4 theta> in 2D, "
+                   "the cubic harmonic scaled alike in 3D (1: along the axes, 0: isotropic)", "1"),
     "wall_time": ("seconds spent growing the cluster to this count", "s"),
     "walk_steps": ("walk steps (or exact jumps) of every walker until this count", "1"),
     "n_particles": ("target number of particles", "1"),

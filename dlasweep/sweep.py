@@ -224,6 +224,7 @@ def measure_task(task, counts, scales, root_seed) -> dict:
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
             "radius_gyration": measure.radius_of_gyration(points)[prefix - 1],
             "max_radius": measure.max_radius(points)[prefix - 1],
+            "anisotropy": measure.anisotropy(points, prefix),
             "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points,
@@ -241,7 +242,7 @@ def error_result(n_counts, n_scales, dim, message) -> dict:
         "box_count": np.zeros((n_counts, n_scales), np.int64),
         "n_grown": np.zeros(n_counts, np.int64),
         "status": np.full(n_counts, STATUSES.index("error"), np.int8),
-        "radius_gyration": nan, "max_radius": nan, "wall_time": nan,
+        "radius_gyration": nan, "max_radius": nan, "anisotropy": nan, "wall_time": nan,
         "walk_steps": np.zeros(n_counts, np.int64),
         "points": np.zeros((0, dim)),
         "diffusion_time": np.zeros(0, np.int64),
@@ -388,7 +389,7 @@ def _assemble(spec, parts, scratch: Path):
         "n_grown": np.zeros(grid, np.int64),
         "status": np.zeros(grid, np.int8),
         "walk_steps": np.zeros(grid, np.int64),
-        **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "wall_time")},
+        **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
     }
     lattice = all(t.params["model"] == "lattice" for t in tasks)
     columns = {a: store.ragged_dtype(lattice) for a in store.AXES[: max(t.params["dim"] for t in tasks)]}

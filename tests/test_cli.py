@@ -119,7 +119,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
 def check_design(ds, spec_text):
     """The dataset as the README names it, for the tiny spec."""
     assert ds["box_count"].dims == ("stickiness", "size", "n_particles", "seed", "scale")
-    for name in ("n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps"):
+    for name in ("n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "wall_time", "walk_steps"):
         assert ds[name].dims == ("stickiness", "size", "n_particles", "seed"), name
     assert list(ds["n_particles"].values) == [20, 60, 150] and list(ds["size"].values) == [0, 24]
     for name in ("x", "y", "diffusion_time"):

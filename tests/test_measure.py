@@ -367,3 +367,65 @@ def test_max_radius_and_mass_within_match_direct_computation():
     np.testing.assert_allclose(max_radius(points), [distance[:k].max() for k in range(1, 501)])
     radii = np.array([0.0, 1.0, 10.0, 33.3, 1e3])
     np.testing.assert_array_equal(mass_within(points, radii), [(distance <= r).sum() for r in radii])
+
+
+def slow_anisotropy(points, m):
+    """<cos 4 theta> (2D) of the outer half of the first m points, from angles, one point at a time."""
+    seed = points[0]
+    distance = [np.hypot(*(p - seed)) for p in points[1:m]]
+    cut = np.median(distance)
+    values = [np.cos(4 * np.arctan2(*(p - seed)[::-1])) for p, d in zip(points[1:m], distance) if d >= cut]
+    return np.mean(values)
+
+
+def test_anisotropy_matches_cos_4_theta_from_angles():
+    from dlasweep.measure import anisotropy
+
+    rng = np.random.default_rng(8)
+    points = rng.normal(size=(501, 2)) * 10
+    counts = [2, 3, 50, 501]
+    np.testing.assert_allclose(anisotropy(points, counts), [slow_anisotropy(points, m) for m in counts], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "directions, expected",
+    [
+        ([(1, 0), (-1, 0), (0, 1), (0, -1)], 1.0),
+        ([(1, 1), (-1, 1), (1, -1), (-1, -1)], -1.0),
+        ([(1, 0, 0), (0, -1, 0), (0, 0, 1)], 1.0),
+        ([(1, 1, 1), (-1, 1, -1)], -2 / 3),
+    ],
+    ids=["2d axes", "2d diagonals", "3d axes", "3d body diagonals"],
+)
+def test_anisotropy_of_arms_along_axes_and_diagonals(directions, expected):
+    from dlasweep.measure import anisotropy
+
+    arms = np.array(directions, float)
+    points = np.r_[np.zeros((1, arms.shape[1])), np.concatenate([arms * k for k in range(1, 21)])]
+    assert anisotropy(points, [len(points)])[0] == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_anisotropy_of_an_isotropic_cloud_is_zero(dim):
+    from dlasweep.measure import anisotropy
+
+    points = np.random.default_rng(dim).normal(size=(200_001, dim))
+    points[0] = 0  # the seed at the centre of the cloud
+    # The outer 1e5 directions: the mean of a quantity of spread < 0.75 has a
+    # standard error below 0.0024; 5 of those bound it.
+    assert abs(anisotropy(points, [len(points)])[0]) < 0.012
+
+
+@pytest.mark.slow
+def test_square_lattice_clusters_grow_along_the_axes_and_continuum_ones_do_not():
+    import dlasweep as dla
+    from dlasweep.fit import ensemble
+    from dlasweep.measure import anisotropy
+
+    lattice = ensemble([anisotropy(dla.grow(n=30_000, seed=s).points, [30_000])[0] for s in range(6)])
+    continuum = ensemble([anisotropy(dla.grow(n=10_000, seed=s, model="offlattice").points, [10_000])[0]
+                          for s in range(12)])
+    # Measured here: lattice 0.2-0.6 per cluster at 3e4 (0.21 at 1e4, 0.64 at 1e6 in the issue);
+    # off-lattice scatters by ~0.2 about 0 (a handful of arms).
+    assert lattice.mean - 3 * lattice.stderr > 0.1, lattice
+    assert abs(continuum.mean) < 3 * continuum.stderr + 0.05, continuum

@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 import dlasweep as dla
-from dlasweep.measure import box_counts, default_scales, max_radius, radius_of_gyration
+from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
 from dlasweep.report import report
 
 STATUSES = "ok boundary step_limit exhausted error".split()
@@ -27,6 +27,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
         "status": np.zeros(shape, np.int8),
         "radius_gyration": np.zeros(shape),
         "max_radius": np.zeros(shape),
+        "anisotropy": np.zeros(shape),
         "wall_time": np.zeros(shape),
         "walk_steps": np.zeros(shape, np.int64),
     }
@@ -46,6 +47,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
             science["n_grown"][index] = m
             science["status"][index] = 0 if m == n else STATUSES.index(c.status)
             science["radius_gyration"][index], science["max_radius"][index] = rg[m - 1], rmax[m - 1]
+            science["anisotropy"][index] = anisotropy(c.points, [m])[0]
             science["wall_time"][index] = elapsed * m / len(c.points)
             science["walk_steps"][index] = c.steps[:m].sum()
         ragged["x"].append(c.points[:, 0])
@@ -77,7 +79,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
     return ds
 
 
-ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png", "mass_radius.png",
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png", "mass_radius.png", "anisotropy.png",
           "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
 
 

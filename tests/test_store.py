@@ -39,7 +39,7 @@ def synthetic_dataset(spec_text=SPEC, failed=()):
         "n_grown": rng.integers(1, 9, grid),
         "status": rng.integers(0, 5, grid).astype(np.int8),
         "walk_steps": rng.integers(0, 1000, grid),
-        **{k: rng.random(grid) for k in ("radius_gyration", "max_radius", "wall_time")},
+        **{k: rng.random(grid) for k in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
     }
     sizes = rng.integers(0, 9, spec.n_tasks)
     total = int(sizes.sum())
@@ -74,7 +74,7 @@ def test_round_trip(saved):
 def test_layout_follows_design(saved):
     ds, _ = saved
     assert ds["box_count"].dims == ("model", "jumps", "size", "n_particles", "seed", "scale")
-    for name in ("n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps"):
+    for name in ("n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "wall_time", "walk_steps"):
         assert ds[name].dims == ("model", "jumps", "size", "n_particles", "seed")
     for name in ("x", "y", "diffusion_time"):
         assert ds[name].dims == ("particle",)

@@ -42,6 +42,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
             assert int(at["n_grown"]) == m
             assert int(at["walk_steps"]) == cluster.steps[:m].sum()
             assert float(at["radius_gyration"]) == measure.radius_of_gyration(cluster.points)[m - 1]
+            np.testing.assert_equal(float(at["anisotropy"]), measure.anisotropy(cluster.points, [m])[0])
             _, counts = measure.box_counts(cluster.points[:m], scales=reference["scale"].values)
             np.testing.assert_array_equal(at["box_count"].values, counts)
             ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
