@@ -295,9 +295,25 @@ def _config(sweep, config, out, resamples):
     # Files written before the anisotropy was measured have none.
     cell["anisotropy"] = (ds["anisotropy"][at].values if "anisotropy" in ds
                           else np.full_like(cell["max_radius"], np.nan))
-    scales = ds["scale"].values
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]
     grid = np.unique(np.concatenate([sweep.history, *needed]))
+    curves = _per_cluster(sweep, config, cell, grid, out)
+    rng = np.random.default_rng(0)
+    for k, n in enumerate(sweep.counts):
+        reached = cell["n_grown"][k] == n
+        _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
+               rng, resamples)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slopes = -np.diff(np.log(cell["box_count"][-1].astype(float)), axis=-1) / np.diff(np.log(sweep.scales))
+    grown = cell["n_grown"][-1] > 0
+    if grown.any():
+        out["box_slope"][config], out["box_slope_std"][config] = slopes[grown].mean(0), slopes[grown].std(0)
+    alive = (cell["n_grown"][-1] == sweep.counts[-1]) & np.isfinite(curves[:, -1])
+    _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, rng, resamples)
+
+
+def _per_cluster(sweep, config, cell, grid, out):
+    """Each cluster's own fits at every count, its diffusion times by depth; returns its Rg at the ``grid`` counts."""
     curves = np.full((sweep.n_seeds, len(grid)), np.nan)
     times, depths = [], []
     for s in range(sweep.n_seeds):
@@ -316,28 +332,17 @@ def _config(sweep, config, out, resamples):
             if points is not None:
                 fit = fit_mass_radius(rg[:m])
                 out["D_cluster"][config][k, s], out["D_cluster_ok"][config][k, s] = fit.D, fit.ok
-            fit = fit_dimension(scales, cell["box_count"][k, s])
+            fit = fit_dimension(sweep.scales, cell["box_count"][k, s])
             out["D_box_cluster"][config][k, s], out["D_box_cluster_ok"][config][k, s] = fit.D, fit.ok
             out["D_box_range_lo"][config][k, s], out["D_box_range_hi"][config][k, s] = fit.range_lo, fit.range_hi
-    rng = np.random.default_rng(0)
-    for k, n in enumerate(sweep.counts):
-        reached = cell["n_grown"][k] == n
-        _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
-               rng, resamples)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slopes = -np.diff(np.log(cell["box_count"][-1].astype(float)), axis=-1) / np.diff(np.log(scales))
-    grown = cell["n_grown"][-1] > 0
-    if grown.any():
-        out["box_slope"][config], out["box_slope_std"][config] = slopes[grown].mean(0), slopes[grown].std(0)
-    if times:
-        times, depths = np.concatenate(times).astype(float), np.concatenate(depths)
-        if len(times):
-            out["diffusion_density"][config] = np.histogram(times, sweep.time_edges, density=True)[0]
-            slot = np.clip(np.digitize(depths, DEPTH_EDGES) - 1, 0, len(DEPTH_EDGES) - 2)
-            out["diffusion_median"][config] = [np.median(times[slot == b]) if (slot == b).any() else np.nan
-                                               for b in range(len(DEPTH_EDGES) - 1)]
-    alive = (cell["n_grown"][-1] == sweep.counts[-1]) & np.isfinite(curves[:, -1])
-    _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, rng, resamples)
+    times = np.concatenate(times).astype(float) if times else np.zeros(0)
+    if len(times):
+        depths = np.concatenate(depths)
+        out["diffusion_density"][config] = np.histogram(times, sweep.time_edges, density=True)[0]
+        slot = np.clip(np.digitize(depths, DEPTH_EDGES) - 1, 0, len(DEPTH_EDGES) - 2)
+        out["diffusion_median"][config] = [np.median(times[slot == b]) if (slot == b).any() else np.nan
+                                           for b in range(len(DEPTH_EDGES) - 1)]
+    return curves
 
 
 def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resamples):

@@ -534,7 +534,7 @@ def anisotropy(points, counts) -> np.ndarray:
     p = np.asarray(points, dtype=np.float64)
     counts = np.asarray(counts, dtype=np.int64)
     if p.ndim != 2 or len(p) == 0 or counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
-        raise ValueError(f"points, counts: expected a non-empty (n, dim) array and counts in 1..n")
+        raise ValueError("points, counts: expected a non-empty (n, dim) array and counts in 1..n")
     offset = p - p[0]
     r2 = (offset**2).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):

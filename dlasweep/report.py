@@ -673,7 +673,7 @@ def _write_report(sweep, figures, path) -> Path:
         lines.append(f"- {label}: D = {_headline(row)}; {inf}.")
     lines += [
         "",
-        f"Box counting, a finite-cluster estimate that reads low (not an equal of the above): "
+        "Box counting, a finite-cluster estimate that reads low (not an equal of the above): "
         + "; ".join(f"{label}: {_interval(row, 'D_box')}" for label, row in rows) + ".",
         "",
         f"Reference: 2D off-lattice DLA D = 1.7100(3) (Menshutin et al. 2008), 1.715(4) (Tolman and Meakin "

@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 
 from dlasweep.fit import ensemble, fit_dimension, fit_mass_radius
 from dlasweep.measure import box_counts, radius_of_gyration
-
-
 from known_sets import KNOWN
 
 TWO_DECADES = 100
