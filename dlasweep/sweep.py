@@ -8,7 +8,9 @@ on how many workers there are or in which order tasks finish.
 Finished tasks go at once to ``OUT.parts/<task key>.npz`` (written under a
 temporary name, then renamed). ``resume=True`` keeps the parts that are there
 and computes the rest; ``OUT.parts/manifest.json`` records the spec's
-identity so that a changed spec is refused. At the end the dataset is
+identity so that a changed spec is refused. A run holds an flock on
+``OUT.parts/.lock`` from start to end, so a second run on the same output is
+refused, and a killed run's lock is free at once. At the end the dataset is
 assembled from the parts in one pass, the clusters through flat files that
 are mapped, not loaded, so memory holds one cluster at a time. This is the
 only module that knows dask.
@@ -28,6 +30,7 @@ half-widths and why the sweep stopped (``store.record_stop``).
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import importlib
 import itertools
 import json
@@ -35,6 +38,7 @@ import logging
 import math
 import os
 import shutil
+import socket
 import sys
 import tempfile
 import time
@@ -49,10 +53,11 @@ from tqdm import tqdm
 from . import measure, store
 from .analysis import summarise
 from .grow import grow
+from .kernels import lattice, offlattice
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
-MANIFEST = "manifest.json"
+MANIFEST, LOCK = "manifest.json", ".lock"
 
 TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reached", "tasks failed"
 """Why a target sweep stopped (its ``stop_reason``); failed tasks stop it so that
@@ -60,7 +65,7 @@ TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reac
 
 
 class ResumeError(ValueError):
-    """The parts folder does not fit this run (changed spec, or no --resume)."""
+    """The parts folder does not fit this run (changed spec, or no --resume), or another run holds it."""
 
 
 def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
@@ -98,8 +103,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     Raises
     ------
     ResumeError
-        When ``out``'s parts folder is from another spec, or exists without
-        ``resume``; nothing is computed then.
+        When ``out``'s parts folder is from another spec, exists without
+        ``resume``, or is locked by a running sweep; nothing is computed then.
     """
     if not isinstance(spec, Spec):
         spec = load_spec(spec)
@@ -113,6 +118,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
             todo = [t for t in batch.tasks() if not parts.finished(t.key)]
             if todo:
                 if dask_client is None:
+                    if progress and client is None and scheduler_file is None and _compiles(spec):
+                        print(f"{spec.name}: compiling kernels (once)", file=sys.stderr)
                     dask_client = session.enter_context(
                         _connected(client, scheduler_file, workers or spec.workers, most))
                 bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
@@ -135,8 +142,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                     store.save(ds, out)
                     ds = store.open_sweep(out)
             break
-        if not failed:
-            parts.remove()
+        parts.done = not failed
     if failed:
         warnings.warn(f"{len(failed)} of {spec.n_tasks} tasks failed: "
                       + "; ".join(f"{k}: {m}" for k, m in failed), RuntimeWarning, stacklevel=2)
@@ -190,6 +196,17 @@ def _more_seeds(spec, n, half_width, failed):
         return None, CAP_REACHED
     wanted = np.where(np.isnan(half_width), 2 * n, np.ceil(1.1 * n * (half_width / spec.target_ci) ** 2))
     return min(spec.max_seeds, max(n + len(spec.seeds), int(wanted[unmet].max()))), None
+
+
+def _compiles(spec) -> bool:
+    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept.
+
+    Growth kernels take most of the compile time; the embedded cluster's
+    tasks use this process's cache, the only one looked at.
+    """
+    kernels = {"lattice": lattice._grow, "offlattice": offlattice._grow}
+    models = {task.params["model"] for task in spec.tasks()}
+    return not all(os.path.exists(kernels[m]._cache._cache_file._index_path) for m in models)
 
 
 def sweep_scales(spec: Spec) -> np.ndarray:
@@ -255,10 +272,12 @@ class Parts:
 
     ``<key>.npz`` holds a finished task, ``<key>.error.npz`` one that failed
     (computed again on resume), so that checking what is done reads nothing.
+    The sweep sets ``done`` once its file is complete: the folder is removed.
     """
 
     def __init__(self, path: Path):
         self.path = path
+        self.done = False
 
     def _file(self, key, error=False) -> Path:
         return self.path / (f"{key}.error.npz" if error else f"{key}.npz")
@@ -283,36 +302,112 @@ class Parts:
         except Exception as err:  # only a crash of the machine itself can leave one damaged
             raise OSError(f"{path}: unreadable ({err}); delete it and run again with --resume") from None
 
-    def remove(self):
-        shutil.rmtree(self.path, ignore_errors=True)
-
 
 @contextlib.contextmanager
 def _parts_folder(spec, out, resume):
+    """The parts folder of ``out``, checked against the spec and locked for the whole run.
+
+    A new folder is made whole (manifest written, lock held) under a
+    temporary name and renamed into place, so no other run sees it half made.
+    It is removed when the run sets ``done``, and when a run that made it
+    fails before any part is saved: renamed away under the lock, so no other
+    run finds it half deleted, then deleted once the lock is released.
+    """
     identity = {"digest": spec.digest(), "identity": spec.identity()}
     if out is None:
         with tempfile.TemporaryDirectory(prefix="dlasweep-") as tmp:
             yield Parts(Path(tmp))
         return
     path = Path(f"{out}.parts")
-    manifest = path / MANIFEST
-    if path.exists():
-        if not resume:
-            raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
+    aside = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}")
+    lock = None if path.exists() else _new_folder(path, aside, identity)
+    made = lock is not None
+    if not made:
+        lock = _lock(path)
+    parts, removed = Parts(path), False
+    try:
+        if not made:
+            _check_manifest(path, identity, resume)
         try:
-            old = json.loads(manifest.read_text())
-        except (OSError, ValueError):
-            raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh") from None
-        if old.get("digest") != identity["digest"]:
-            changes = differences(old.get("identity", {}), identity["identity"])
-            raise ResumeError(f"cannot resume: the spec differs from the one in {path} ("
-                              + "; ".join(changes) + ")")
-    else:
-        path.mkdir()
-        tmp = path / f".{MANIFEST}.tmp"
-        tmp.write_text(json.dumps(identity, indent=1))
-        os.replace(tmp, manifest)
-    yield Parts(path)
+            yield parts
+        except BaseException:
+            parts.done = parts.done or (made and not any(path.glob("*.npz")))
+            raise
+        finally:
+            if parts.done:
+                path.rename(aside)
+                removed = True
+    finally:
+        if not removed:
+            # A folder that stays keeps no lock file naming an ended run; ``_lock``
+            # never holds one deleted under it.
+            (path / LOCK).unlink(missing_ok=True)
+        os.close(lock)
+        if removed:
+            shutil.rmtree(aside, ignore_errors=True)
+
+
+def _new_folder(path, staging, identity):
+    """Make the parts folder ``path`` in ``staging``; its lock, or None if another run made it first."""
+    staging.mkdir()
+    lock = _lock(staging)
+    try:
+        (staging / MANIFEST).write_text(json.dumps(identity, indent=1))
+        staging.rename(path)
+    except OSError:
+        os.close(lock)
+        shutil.rmtree(staging, ignore_errors=True)
+        if path.is_dir():  # another run made it first
+            return None
+        raise
+    return lock
+
+
+def _lock(folder) -> int:
+    """Lock a parts folder for this process; return the lock file's descriptor.
+
+    An flock ends with its process, so the lock file of a killed run is
+    taken over at once. The file names its holder, for the runs it refuses.
+
+    Raises
+    ------
+    ResumeError
+        When another run holds the lock, or has just removed the folder.
+    """
+    file = folder / LOCK
+    while True:
+        try:
+            fd = os.open(file, os.O_RDWR | os.O_CREAT, 0o644)
+        except FileNotFoundError:
+            raise ResumeError(f"{folder}: removed by the run that held it, which has ended") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 256).decode(errors="replace") or "another process"
+            os.close(fd)
+            raise ResumeError(f"{folder}: in use by {holder}; wait for it to end, or stop it") from None
+        with contextlib.suppress(FileNotFoundError):
+            if os.path.samestat(os.fstat(fd), os.stat(file)):
+                break
+        os.close(fd)  # its holder deleted it on leaving, after we opened it: lock the one there now
+    os.ftruncate(fd, 0)
+    os.write(fd, f"process {os.getpid()} on {socket.gethostname()}".encode())
+    return fd
+
+
+def _check_manifest(path, identity, resume):
+    """Refuse an existing parts folder without ``resume``, or from another spec (``ResumeError``)."""
+    if not resume:
+        raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
+    manifest = path / MANIFEST
+    try:
+        old = json.loads(manifest.read_text())
+    except (OSError, ValueError):
+        raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh") from None
+    if old.get("digest") != identity["digest"]:
+        changes = differences(old.get("identity", {}), identity["identity"])
+        raise ResumeError(f"cannot resume: the spec differs from the one in {path} ("
+                          + "; ".join(changes) + ")")
 
 
 @contextlib.contextmanager

@@ -1,21 +1,24 @@
 """Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
 
 import contextlib
+import errno
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import dask
 import numpy as np
 import pytest
 import xarray as xr
 from distributed import Client, LocalCluster
 
 import dlasweep as dla
-from conftest import TINY_SPEC, science
+from conftest import TINY_SPEC, files_under, science
 from dlasweep import measure, store, sweep
 from dlasweep.spec import parse_spec
 
@@ -176,6 +179,121 @@ def test_early_stops_keep_their_status(dask_client):
         assert store.STATUS_FLAGS[int(final["status"])] == cluster.status
         assert int(final["n_grown"]) == int(ds["cluster_particles"][k]) == cluster.n
     assert (ds["status"] == store.STATUS_FLAGS.index("step_limit")).any()
+
+
+def test_an_unreachable_scheduler_leaves_nothing(tmp_path):
+    with (dask.config.set({"distributed.comm.timeouts.connect": "1s"}),
+          pytest.raises(OSError, match="tcp://127.0.0.1:1")):
+        dla.run_sweep(parse_spec(TINY_SPEC), client="tcp://127.0.0.1:1", out=tmp_path / "x.nc")
+    assert files_under(tmp_path) == set()
+
+
+def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, write_spec, tmp_path, dask_cluster,
+                                                                      reference, monkeypatch):
+    out, address = tmp_path / "tiny.nc", dask_cluster.scheduler_address
+    real_write = sweep.Parts.write
+
+    def write(self, key, result):
+        if len(finished_parts(out)) == 5:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_write(self, key, result)
+
+    monkeypatch.setattr(sweep.Parts, "write", write)
+    status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", address)
+    assert status == 1 and err.strip().splitlines() == [
+        "dlasweep sweep: failed: OSError: [Errno 28] No space left on device"]
+    assert len(finished_parts(out)) == 5 and not out.exists()
+    monkeypatch.undo()
+    status, _, err = run_cli("sweep", write_spec(), "-o", out, "--resume", "--scheduler", address)
+    assert status == 0, err
+    with dla.open_sweep(out) as ds:
+        xr.testing.assert_identical(science(ds), science(reference))
+    assert not Path(f"{out}.parts").exists()
+
+
+@contextlib.contextmanager
+def locked_by_another_process(folder):
+    """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""
+    code = "import sys, pathlib, dlasweep.sweep as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
+    holder = subprocess.Popen([sys.executable, "-c", code, str(folder)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE)
+    try:
+        assert holder.stdout.readline() == b"1\n"
+        yield holder
+    finally:
+        holder.kill()
+        holder.wait()
+
+
+@pytest.fixture
+def interrupted(tmp_path, dask_client, monkeypatch):
+    """The output of the tiny sweep, killed after five finished tasks."""
+    out = tmp_path / "tiny.nc"
+    with monkeypatch.context() as patch:
+        interrupt_after(patch, 5)
+        with pytest.raises(Interrupt):
+            dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    return out
+
+
+@pytest.mark.parametrize("resume", [[], ["--resume"]])
+def test_a_running_sweep_locks_out_a_second_one(resume, interrupted, run_cli, write_spec, dask_cluster):
+    parts = Path(f"{interrupted}.parts")
+    with locked_by_another_process(parts) as holder:
+        before = files_under(parts)
+        status, _, err = run_cli("sweep", write_spec(), "-o", interrupted, *resume,
+                                 "--scheduler", dask_cluster.scheduler_address)
+        assert files_under(parts) == before
+    assert status == 2 and len(err.strip().splitlines()) == 1
+    assert f"{parts}: in use by process {holder.pid} on " in err
+
+
+def test_the_lock_of_a_killed_run_is_taken_over(interrupted, dask_client, reference, monkeypatch):
+    parts = Path(f"{interrupted}.parts")
+    with locked_by_another_process(parts):
+        pass  # killed: its lock file stays, naming it
+    assert (parts / sweep.LOCK).exists()
+    holders = []
+    real_write = sweep.Parts.write
+    monkeypatch.setattr(sweep.Parts, "write", lambda self, key, result: (
+        holders.append((parts / sweep.LOCK).read_text()), real_write(self, key, result)))
+    resumed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=interrupted, resume=True)
+    assert len(holders) == 7 and set(holders) == {f"process {os.getpid()} on {socket.gethostname()}"}
+    xr.testing.assert_identical(science(resumed), science(reference))
+    resumed.close()
+
+
+def test_the_lock_is_held_for_every_batch_and_the_final_file(tmp_path, dask_client, monkeypatch):
+    out = tmp_path / "t.nc"
+    parts = Path(f"{out}.parts")
+    spec = parse_spec(TINY_SPEC + "target_ci = 1e-4\nmax_seeds = 6\n")
+    held = []
+
+    def check(real):
+        def checked(*args):
+            with pytest.raises(sweep.ResumeError, match=f"in use by process {os.getpid()} "):
+                sweep._lock(parts)
+            held.append(real.__name__)
+            return real(*args)
+        return checked
+
+    monkeypatch.setattr(sweep.Parts, "write", check(sweep.Parts.write))
+    monkeypatch.setattr(store, "save", check(store.save))
+    dla.run_sweep(spec, client=dask_client, out=out).close()
+    assert held == ["write"] * 24 + ["save"]
+    assert files_under(tmp_path) == {Path("t.nc")}
+
+
+def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
+    spec = parse_spec(TINY_SPEC)
+    code = "import sys, dlasweep.sweep as s, dlasweep.spec as p; print(s._compiles(p.parse_spec(sys.argv[1])))"
+    cold = subprocess.run([sys.executable, "-c", code, TINY_SPEC], capture_output=True, text=True, check=True,
+                          env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    dla.grow(20, 0, model="lattice")  # compiles into the cache, if it is not there yet
+    assert cold.stdout == "True\n" and not sweep._compiles(spec)
+    monkeypatch.setattr(sweep, "_compiles", lambda spec: True)
+    dla.run_sweep(parse_spec("name = 'cold'\n[grid]\nn_particles = [5]\nseeds = 1\n"), progress=True)
+    assert capsys.readouterr().err.startswith("cold: compiling kernels (once)\n")
 
 
 # Real processes: an external scheduler and workers, kill -9, resume.
