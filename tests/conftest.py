@@ -80,3 +80,18 @@ def science(ds):
 def files_under(path: Path) -> set:
     """Every file and folder below ``path``, relative to it."""
     return {p.relative_to(path) for p in Path(path).rglob("*")}
+
+
+@pytest.fixture
+def replicate_1_fails(monkeypatch):
+    """Make growing replicate 1 of every configuration raise, as a bug in a kernel would."""
+    from dlasweep import sweep
+
+    real_grow = sweep.grow
+
+    def grow(n, seed, **kwargs):
+        if seed.spawn_key[-1] == 1:
+            raise RuntimeError("simulated failure")
+        return real_grow(n, seed, **kwargs)
+
+    monkeypatch.setattr(sweep, "grow", grow)

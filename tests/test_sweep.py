@@ -123,15 +123,8 @@ def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
     assert len(list(out.with_name("tiny.nc.parts").glob("*.npz"))) == 2
 
 
-def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client, reference, monkeypatch):
-    real_grow = sweep.grow
-
-    def grow_failing_seed_1(n, seed, **kwargs):
-        if seed.spawn_key[-1] == 1:
-            raise RuntimeError("simulated failure")
-        return real_grow(n, seed, **kwargs)
-
-    monkeypatch.setattr(sweep, "grow", grow_failing_seed_1)
+def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client, reference, monkeypatch,
+                                                          replicate_1_fails):
     out = tmp_path / "tiny.nc"
     with pytest.warns(RuntimeWarning, match="4 of 12 tasks failed"):
         ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)

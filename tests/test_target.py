@@ -102,15 +102,8 @@ def test_a_killed_target_sweep_resumes_to_the_same_result(tmp_path, dask_client,
     resumed.close()
 
 
-def test_failed_tasks_stop_the_batches_until_resume_retries_them(tmp_path, dask_client, reached, monkeypatch):
-    real_grow = sweep.grow
-
-    def grow_failing_replicate_1(n, seed, **kwargs):
-        if seed.spawn_key[-1] == 1:
-            raise RuntimeError("simulated failure")
-        return real_grow(n, seed, **kwargs)
-
-    monkeypatch.setattr(sweep, "grow", grow_failing_replicate_1)
+def test_failed_tasks_stop_the_batches_until_resume_retries_them(tmp_path, dask_client, reached, monkeypatch,
+                                                                 replicate_1_fails):
     out = tmp_path / "target.nc"
     with pytest.warns(RuntimeWarning, match="2 of 8 tasks failed"):
         failed = dla.run_sweep(parse_spec(spec_text()), client=dask_client, out=out)
