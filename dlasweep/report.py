@@ -246,8 +246,9 @@ def _gallery(sweep, path):
             draw_points(ax, points.astype(float), sweep.lattice, 3.0)
         else:
             ax.set_axis_off()
-    fig.suptitle("Clusters (seed 0), coloured by attachment order (dark: early)"
-                 + (", projected on x-y" if sweep.dim == 3 else ""))
+    # Two short lines: a one-panel gallery is only 3.4 inches wide.
+    fig.suptitle("Seed 0 of each configuration\ncolour: attachment order (dark: early)"
+                 + ("\nx-y view, paler: deeper" if sweep.dim == 3 else ""), fontsize=9)
     _save(fig, path)
     extra = f" (first {_MAX_PANELS} of {len(sweep.configs)} configurations)" if len(sweep.configs) > _MAX_PANELS else ""
     return f"One cluster per configuration at its largest count{extra}, coloured by attachment order."
