@@ -1,19 +1,22 @@
-"""Run a sweep on dask: one task per cluster, each result saved as it arrives.
+"""Run a sweep on dask: batches of clusters as tasks, each batch saved as it arrives.
 
-Every task grows one (swept params, size, seed) cluster once, to the largest
-particle count, and measures each count as a prefix. Its random stream is
-``SeedSequence(root_seed, spawn_key=grid indices)``, so results do not depend
-on how many workers there are or in which order tasks finish.
+Every cluster task grows one (swept params, size, seed) cluster once, to the
+largest particle count, and measures each count as a prefix. Its random
+stream is ``SeedSequence(root_seed, spawn_key=grid indices)``, so results do
+not depend on how many workers there are, in which order tasks finish, or
+how they are batched. A dask task runs a batch of consecutive cluster tasks
+worth about ``TASK_SECONDS`` (``_batch_size``), so that small clusters do not
+pay dask's and the part files' overhead one by one.
 
-Finished tasks go at once to ``OUT.parts/<task key>.npz`` (written under a
-temporary name, then renamed). ``resume=True`` keeps the parts that are there
-and computes the rest; ``OUT.parts/manifest.json`` records the spec's
-identity so that a changed spec is refused. A run holds an flock on
-``OUT.parts/.lock`` from start to end, so a second run on the same output is
-refused, and a killed run's lock is free at once. At the end the dataset is
-assembled from the parts in one pass, the clusters through flat files that
-are mapped, not loaded, so memory holds one cluster at a time. This is the
-only module that knows dask.
+Finished batches go at once to ``OUT.parts/part-<id>.npz`` (written under a
+temporary name, then renamed; see ``Parts``). ``resume=True`` keeps the
+clusters finished there and computes the rest; ``OUT.parts/manifest.json``
+records the spec's identity so that a changed spec is refused. A run holds
+an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
+same output is refused, and a killed run's lock is free at once. At the end
+the dataset is assembled from the parts in one pass, the clusters through
+flat files that are mapped, not loaded, so memory holds one part at a time.
+This is the only module that knows dask.
 
 Precision on demand (``[run] target_ci``): the seeds of the spec are a first
 batch. After each batch the dataset is assembled and summarised
@@ -58,6 +61,14 @@ from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
 MANIFEST, LOCK = "manifest.json", ".lock"
+
+TASK_SECONDS = 0.25
+"""Work given to one dask task: its overhead (scheduling, a part file: milliseconds)
+becomes small, while a kill loses little and the threads share the end of a sweep."""
+
+SECONDS_PER_PARTICLE = 3e-6
+"""Growing and measuring a 2D lattice cluster, per particle of its largest count
+(about linear from 10^3 to 10^5 particles; other models take longer)."""
 
 TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reached", "tasks failed"
 """Why a target sweep stopped (its ``stop_reason``); failed tasks stop it so that
@@ -219,6 +230,17 @@ def sweep_scales(spec: Spec) -> np.ndarray:
     return measure.default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
 
 
+def _batch_size(spec, n_todo, threads) -> int:
+    """Cluster tasks per dask task: about ``TASK_SECONDS`` of work, yet at least 4 dask tasks per thread."""
+    per_cluster = SECONDS_PER_PARTICLE * spec.counts[-1]
+    return max(1, min(int(TASK_SECONDS / per_cluster), n_todo // (4 * threads)))
+
+
+def measure_tasks(tasks, counts, scales, root_seed) -> list:
+    """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task."""
+    return [measure_task(task, counts, scales, root_seed) for task in tasks]
+
+
 def measure_task(task, counts, scales, root_seed) -> dict:
     """Grow one cluster and measure every count; runs on a worker.
 
@@ -268,39 +290,82 @@ def error_result(n_counts, n_scales, dim, message) -> dict:
 
 
 class Parts:
-    """The folder of finished task results of one sweep.
+    """The folder of finished cluster results of one sweep.
 
-    ``<key>.npz`` holds a finished task, ``<key>.error.npz`` one that failed
-    (computed again on resume), so that checking what is done reads nothing.
-    The sweep sets ``done`` once its file is complete: the folder is removed.
+    Each ``part-<id>.npz`` holds a batch of results: its ``keys`` and
+    ``failed`` arrays index them, member ``<name>`` holds variable ``name`` of
+    them all, flattened and concatenated, and ``<name>.shape`` the shape of
+    each: a few zip members per part, since one per variable and cluster
+    took as long to write and read as 10^3-particle clusters take to grow.
+    A cluster is finished when a part holds it without
+    error; a failed one is computed again on resume, and a later part then
+    holds it too. Knowing what is done reads only the indexes, once. The
+    sweep sets ``done`` once its file is complete: the folder is removed.
     """
 
     def __init__(self, path: Path):
         self.path = path
         self.done = False
+        self._where = None
 
-    def _file(self, key, error=False) -> Path:
-        return self.path / (f"{key}.error.npz" if error else f"{key}.npz")
+    @property
+    def where(self) -> dict:
+        """Task key -> (part file, position in it, failed); a finished result wins over a failed one."""
+        if self._where is None:
+            self._where = {}
+            for file in sorted(self.path.glob("part-*.npz")):
+                with self._reading(file), np.load(file) as z:
+                    self._add(self._where, file, z["keys"], z["failed"])
+        return self._where
 
-    def write(self, key, result):
-        error = str(result["error"]) != ""
-        tmp = self.path / f".{key}.{os.getpid()}.tmp"
+    @staticmethod
+    def _add(index, file, keys, failed):
+        for i, (key, fail) in enumerate(zip(keys.tolist(), failed.tolist())):
+            if not (fail and key in index):
+                index[key] = (file, i, fail)
+
+    @staticmethod
+    @contextlib.contextmanager
+    def _reading(file):
+        try:
+            yield
+        except Exception as err:  # only a crash of the machine itself can leave one damaged
+            raise OSError(f"{file}: unreadable ({err}); delete it and run again with --resume") from None
+
+    def write(self, results: dict):
+        """Save a batch of results (by task key) as one part."""
+        index = self.where  # read before the new part is there
+        file = self.path / f"part-{uuid.uuid4().hex}.npz"
+        tmp = self.path / f".{file.name}.tmp"
+        keys = np.array(list(results))
+        failed = np.array([str(r["error"]) != "" for r in results.values()])
+        members = {}
+        for name in next(iter(results.values())):
+            each = [np.asarray(r[name]) for r in results.values()]
+            # Empty arrays (a failed cluster's points) must not set the dtype of the others.
+            members[name] = np.concatenate([v.ravel() for v in each if v.size] or [each[0].ravel()])
+            members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)
         with open(tmp, "wb") as f:
-            np.savez(f, **result)
-        os.replace(tmp, self._file(key, error))
-        if not error:
-            self._file(key, error=True).unlink(missing_ok=True)
+            np.savez(f, keys=keys, failed=failed, **members)
+        os.replace(tmp, file)
+        self._add(index, file, keys, failed)
 
     def finished(self, key) -> bool:
-        return self._file(key).exists()
+        return key in self.where and not self.where[key][2]
 
-    def read(self, key) -> dict:
-        path = self._file(key) if self.finished(key) else self._file(key, error=True)
-        try:
-            with np.load(path) as z:
-                return {name: z[name] for name in z.files}
-        except Exception as err:  # only a crash of the machine itself can leave one damaged
-            raise OSError(f"{path}: unreadable ({err}); delete it and run again with --resume") from None
+    def results(self, keys):
+        """The result of each key, in order; a part is read once for each run of its keys."""
+        for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
+            with self._reading(file), np.load(file) as z:
+                part = [{} for _ in z["keys"]]
+                for name in z.files:
+                    if name in ("keys", "failed") or name.endswith(".shape"):
+                        continue
+                    flat, shapes = z[name], z[f"{name}.shape"]
+                    ends = np.cumsum([math.prod(shape) for shape in shapes])
+                    for result, shape, end in zip(part, shapes, ends):
+                        result[name] = flat[end - math.prod(shape): end].reshape(shape)
+            yield from (part[self.where[key][1]] for key in run)
 
 
 @contextlib.contextmanager
@@ -324,7 +389,7 @@ def _parts_folder(spec, out, resume):
     made = lock is not None
     if not made:
         lock = _lock(path)
-    parts, removed = Parts(path), False
+    parts, removed = Parts(path), False  # reads nothing before the manifest is checked
     try:
         if not made:
             _check_manifest(path, identity, resume)
@@ -439,19 +504,21 @@ def _usable_cores() -> int:
 
 
 def _compute(client, spec, todo, parts, bar):
-    """Submit tasks in a bounded window and save each result as it arrives."""
+    """Submit batches of tasks in a bounded window and save each batch as one part as it arrives."""
     counts = np.asarray(spec.counts, np.int64)
     scales = sweep_scales(spec)
-    window = max(100, 4 * sum(client.nthreads().values()))
-    pending = iter(todo)
+    threads = max(1, sum(client.nthreads().values()))  # an adaptive cluster may start with none
+    window = max(100, 4 * threads)
+    size = _batch_size(spec, len(todo), threads)
+    pending = (todo[i:i + size] for i in range(0, len(todo), size))
     # Unique per run: a key shared with an earlier run's lingering future would return its result.
     tag = uuid.uuid4().hex[:12]
-    task_of = {}
+    batch_of = {}
 
-    def submit(task):
-        future = client.submit(measure_task, task, counts, scales, spec.root_seed,
-                               key=f"{task.key}-{tag}", pure=False)
-        task_of[future.key] = task
+    def submit(batch):
+        future = client.submit(measure_tasks, batch, counts, scales, spec.root_seed,
+                               key=f"{batch[0].key}+{len(batch)}-{tag}", pure=False)
+        batch_of[future.key] = batch
         return future
 
     running = as_completed([submit(t) for t in itertools.islice(pending, window)],
@@ -460,18 +527,18 @@ def _compute(client, spec, todo, parts, bar):
     # the idle client thread does it now, while the workers grow clusters
     with contextlib.suppress(ImportError):
         importlib.import_module("dask.array")
-    for future, result in running:
-        task = task_of.pop(future.key)
+    for future, results in running:
+        batch = batch_of.pop(future.key)
         if future.status != "finished":
             # Dask gave up on it (its workers kept dying: KilledWorker) or it was cancelled.
-            error = result[1] if future.status == "error" else None
+            error = results[1] if future.status == "error" else None
             message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
-            result = error_result(len(counts), len(scales), task.params["dim"], message)
-        parts.write(task.key, result)
+            results = [error_result(len(counts), len(scales), task.params["dim"], message) for task in batch]
+        parts.write({task.key: result for task, result in zip(batch, results)})
         future.release()
-        bar.update()
-        for task in itertools.islice(pending, 1):
-            running.add(submit(task))
+        bar.update(len(batch))
+        for batch in itertools.islice(pending, 1):
+            running.add(submit(batch))
 
 
 def _assemble(spec, parts, scratch: Path):
@@ -492,8 +559,7 @@ def _assemble(spec, parts, scratch: Path):
     sizes, failed = [], []
     with contextlib.ExitStack() as files:
         sinks = {name: files.enter_context(open(scratch / name, "wb")) for name in columns}
-        for task in tasks:
-            result = parts.read(task.key)
+        for task, result in zip(tasks, parts.results(t.key for t in tasks)):
             where = (*task.index[:-1], slice(None), task.index[-1])
             for name in science:
                 science[name][where] = result[name]

@@ -70,39 +70,76 @@ class Interrupt(BaseException):
     """Stands for a kill: nothing in the sweep may catch it."""
 
 
-def interrupt_after(monkeypatch, n_parts):
-    """Make the n-th saved part the last one, as if the process died there."""
+def interrupt_after(monkeypatch, n_clusters):
+    """Make the process die at the first part that would bring the saved clusters past n, as a kill would."""
     written = []
     real_write = sweep.Parts.write
 
-    def write(self, key, result):
-        if len(written) == n_parts:
+    def write(self, results):
+        if len(written) + len(results) > n_clusters:
             raise Interrupt
-        real_write(self, key, result)
-        written.append(key)
+        real_write(self, results)
+        written.extend(results)
 
     monkeypatch.setattr(sweep.Parts, "write", write)
     return written
 
 
 def record_writes(monkeypatch):
+    """The keys of the clusters saved, in order."""
     written = []
     real_write = sweep.Parts.write
     monkeypatch.setattr(sweep.Parts, "write",
-                        lambda self, key, result: (written.append(key), real_write(self, key, result)))
+                        lambda self, results: (written.extend(results), real_write(self, results)))
     return written
 
 
-def test_resume_computes_only_what_is_missing(tmp_path, dask_client, reference, monkeypatch):
+def finished_clusters(out):
+    """The keys of the clusters finished in the parts of ``out``."""
+    parts = sweep.Parts(Path(f"{out}.parts"))
+    return [key for key in parts.where if parts.finished(key)]
+
+
+def batches_of(monkeypatch, size):
+    """Make every dask task a batch of ``size`` clusters."""
+    monkeypatch.setattr(sweep, "_batch_size", lambda spec, n_todo, threads: size)
+
+
+def test_the_batch_size_follows_the_counts():
+    def size(counts, seeds):
+        spec = parse_spec(f"[grid]\nn_particles = {counts}\nseeds = {seeds}\n")
+        return sweep._batch_size(spec, seeds, 2)
+
+    # About TASK_SECONDS of work per dask task, and at least four of them per thread.
+    assert (size([100, 1000], 1000), size([1000, 10000], 64), size([10000, 100000], 32)) == (83, 8, 1)
+    assert size([100, 1000], 40) == 5 and size([10], 7) == 1
+
+
+def test_batches_give_the_same_results(reference, dask_client, monkeypatch):
+    parts = []
+    real_write = sweep.Parts.write
+    monkeypatch.setattr(sweep.Parts, "write",
+                        lambda self, results: (parts.append(len(results)), real_write(self, results)))
+    batches_of(monkeypatch, 5)
+    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client)
+    assert sorted(parts) == [2, 5, 5]
+    xr.testing.assert_identical(science(ds), science(reference))
+
+
+@pytest.mark.parametrize("before, after", [(1, 1), (3, 2)])
+def test_resume_computes_only_what_is_missing(before, after, tmp_path, dask_client, reference, monkeypatch):
     out = tmp_path / "tiny.nc"
     spec = parse_spec(TINY_SPEC)
+    batches_of(monkeypatch, before)
     first = interrupt_after(monkeypatch, 5)
     with pytest.raises(Interrupt):
         dla.run_sweep(spec, client=dask_client, out=out)
-    assert not out.exists() and len(list(out.with_name("tiny.nc.parts").glob("*.npz"))) == 5
+    assert not out.exists() and sorted(finished_clusters(out)) == sorted(first)
+    assert len(first) == 5 - 5 % before
     monkeypatch.undo()
     with pytest.raises(sweep.ResumeError, match="--resume"):
         dla.run_sweep(spec, client=dask_client, out=out)
+    batches_of(monkeypatch, after)
     second = record_writes(monkeypatch)
     resumed = dla.run_sweep(spec, client=dask_client, out=out, resume=True)
     assert sorted(first + second) == sorted(t.key for t in spec.tasks())
@@ -120,12 +157,14 @@ def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
     changed = parse_spec(TINY_SPEC.replace("[20, 60, 150]", "[20, 60, 100]"))
     with pytest.raises(sweep.ResumeError, match=r"grid.n_particles: \[20, 60, 150\] -> \[20, 60, 100\]"):
         dla.run_sweep(changed, client=dask_client, out=out, resume=True)
-    assert len(list(out.with_name("tiny.nc.parts").glob("*.npz"))) == 2
+    assert len(finished_clusters(out)) == 2
 
 
-def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client, reference, monkeypatch,
+@pytest.mark.parametrize("size", [1, 5])
+def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_client, reference, monkeypatch,
                                                           replicate_1_fails):
     out = tmp_path / "tiny.nc"
+    batches_of(monkeypatch, size)  # 5: failed and finished clusters share parts
     with pytest.warns(RuntimeWarning, match="4 of 12 tasks failed"):
         ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
     error = store.STATUS_FLAGS.index("error")
@@ -134,6 +173,7 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client,
     assert ds["cluster_particles"].values.reshape(2, 2, 3)[..., 1].sum() == 0
     ds.close()
     monkeypatch.undo()
+    batches_of(monkeypatch, size)
     retried = record_writes(monkeypatch)
     healed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out, resume=True)
     assert sorted(retried) == ["task-0-0-1", "task-0-1-1", "task-1-0-1", "task-1-1-1"]
@@ -144,6 +184,7 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(tmp_path, dask_client,
 def test_submission_is_batched(dask_client, monkeypatch):
     """The client holds a bounded window of tasks, however many the sweep has."""
     spec = parse_spec("[grid]\nn_particles = [1]\nseeds = 250\n")
+    batches_of(monkeypatch, 1)
     in_flight, peak = [0], [0]
     real_submit, real_write = dask_client.submit, sweep.Parts.write
 
@@ -152,9 +193,9 @@ def test_submission_is_batched(dask_client, monkeypatch):
         peak[0] = max(peak[0], in_flight[0])
         return real_submit(*args, **kwargs)
 
-    def write(self, key, result):
+    def write(self, results):
         in_flight[0] -= 1
-        real_write(self, key, result)
+        real_write(self, results)
 
     monkeypatch.setattr(dask_client, "submit", submit)
     monkeypatch.setattr(sweep.Parts, "write", write)
@@ -186,16 +227,16 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
     out, address = tmp_path / "tiny.nc", dask_cluster.scheduler_address
     real_write = sweep.Parts.write
 
-    def write(self, key, result):
-        if len(finished_parts(out)) == 5:
+    def write(self, results):
+        if len(finished_clusters(out)) == 5:
             raise OSError(errno.ENOSPC, "No space left on device")
-        real_write(self, key, result)
+        real_write(self, results)
 
     monkeypatch.setattr(sweep.Parts, "write", write)
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", address)
     assert status == 1 and err.strip().splitlines() == [
         "dlasweep sweep: failed: OSError: [Errno 28] No space left on device"]
-    assert len(finished_parts(out)) == 5 and not out.exists()
+    assert len(finished_clusters(out)) == 5 and not out.exists()
     monkeypatch.undo()
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--resume", "--scheduler", address)
     assert status == 0, err
@@ -248,8 +289,8 @@ def test_the_lock_of_a_killed_run_is_taken_over(interrupted, dask_client, refere
     assert (parts / sweep.LOCK).exists()
     holders = []
     real_write = sweep.Parts.write
-    monkeypatch.setattr(sweep.Parts, "write", lambda self, key, result: (
-        holders.append((parts / sweep.LOCK).read_text()), real_write(self, key, result)))
+    monkeypatch.setattr(sweep.Parts, "write", lambda self, results: (
+        holders.append((parts / sweep.LOCK).read_text()), real_write(self, results)))
     resumed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=interrupted, resume=True)
     assert len(holders) == 7 and set(holders) == {f"process {os.getpid()} on {socket.gethostname()}"}
     xr.testing.assert_identical(science(resumed), science(reference))
@@ -318,10 +359,6 @@ def wait_for(condition, what, timeout=60.0):
         time.sleep(0.05)
 
 
-def finished_parts(out):
-    return list(Path(f"{out}.parts").glob("task-*.npz"))
-
-
 def start_worker(scheduler_file, log):
     worker = spawn(BIN / "dask", "worker", "--scheduler-file", scheduler_file, "--nthreads", "1",
                    "--host", "127.0.0.1", "--no-dashboard", log=log)
@@ -366,7 +403,7 @@ def test_a_killed_worker_loses_nothing(external_scheduler, slow_spec, slow_refer
     run = spawn(BIN / "dlasweep", "sweep", slow_spec, "-o", out, "--scheduler-file", external_scheduler,
                 log=tmp_path / "sweep.log")
     try:
-        wait_for(lambda: finished_parts(out), "a first finished task")
+        wait_for(lambda: finished_clusters(out), "a first finished task")
         os.killpg(extra.pid, signal.SIGKILL)
         assert run.wait(timeout=120) == 0, (tmp_path / "sweep.log").read_text()
     finally:
@@ -384,11 +421,11 @@ def test_resume_after_kill_9(external_scheduler, slow_spec, slow_reference, tmp_
     run = spawn(BIN / "dlasweep", "sweep", slow_spec, "-o", out, "--scheduler-file", external_scheduler,
                 log=tmp_path / "sweep.log")
     try:
-        wait_for(lambda: len(finished_parts(out)) >= 2, "two finished tasks")
+        wait_for(lambda: len(finished_clusters(out)) >= 2, "two finished tasks")
     finally:
         os.killpg(run.pid, signal.SIGKILL)
         run.wait()
-    assert 2 <= len(finished_parts(out)) < 8 and not out.exists()
+    assert 2 <= len(finished_clusters(out)) < 8 and not out.exists()
     address = json.loads(external_scheduler.read_text())["address"]
     status, _, err = run_cli("sweep", slow_spec, "-o", out, "--resume", "--scheduler", address)
     assert status == 0, err
