@@ -291,45 +291,31 @@ def _box_counts(sweep, path):
 
 
 def _local_slopes(sweep, path):
-    n_local = sweep.s["n_local"].values
-    if len(n_local) == 0 or not np.isfinite(sweep.s["D_local"].values).any():
+    slope = sweep.s["box_slope"].values
+    if slope.shape[-1] == 0 or not np.isfinite(slope).any():
         return None
-    fig, (mr, box) = _figure(2, 5.2, 4.0)
     mid = sweep.s["scale_mid"].values
+    fitted = sweep.s["D_box_range_hi"].isel(n_particles=-1).values
+    # Beyond the fitted windows the counts saturate and the slope is noise.
+    top = np.nanmax(fitted) if np.isfinite(fitted).any() else mid[-1]
+    keep = (mid >= 1.5) & (mid <= top)
+    fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
-        colour, label = _colour(c), sweep.label(config)
-        local = sweep.at("D_local", config)
-        mr.semilogx(n_local, local, color=colour, label=label)
-        mr.fill_between(n_local, sweep.at("D_local_ci_lo", config), sweep.at("D_local_ci_hi", config),
-                        color=colour, alpha=0.2, lw=0)
-        d_inf = sweep.at("D_inf", config)
-        if np.isfinite(d_inf):
-            mr.axhspan(sweep.at("D_inf_ci_lo", config), sweep.at("D_inf_ci_hi", config), color=colour, alpha=0.1,
-                       lw=0)
-            mr.annotate(f"D_inf {d_inf:.3f}", (n_local[-1], d_inf), fontsize=6, color=colour,
-                        xytext=(2, 0), textcoords="offset points")
-        slope, spread = sweep.at("box_slope", config), sweep.at("box_slope_std", config)
-        fitted = sweep.at("D_box_range_hi", config, n_particles=len(sweep.counts) - 1)
-        top = 2 * np.nanmax(fitted) if np.isfinite(fitted).any() else mid[-1]
-        keep = np.isfinite(slope) & (mid >= 1.5) & (mid <= top)
-        box.semilogx(mid[keep], slope[keep], color=colour, label=label)
-        box.fill_between(mid[keep], (slope - spread)[keep], (slope + spread)[keep], color=colour, alpha=0.15, lw=0)
-    for ax in (mr, box):
-        if sweep.reference:
-            ax.axhline(sweep.reference, color="k", ls="--", lw=1,
-                       label=f"off-lattice reference {sweep.reference}")
-    mr.set_xlabel("particles n (octave centre)")
-    mr.set_ylabel("D_eff = d ln n / d ln <Rg>")
-    mr.set_title("Mass-radius local slope, ensemble (95% band)")
-    box.set_xlabel("box side s")
-    box.set_ylabel("-d ln N / d ln s")
-    box.set_ylim(0.5, sweep.dim + 0.3)
-    box.set_title(f"Box-counting local slope at N={sweep.counts[-1]} (mean ± std)")
-    mr.legend(fontsize=6)
+        mean, spread = sweep.at("box_slope", config)[keep], sweep.at("box_slope_std", config)[keep]
+        ax.plot(mid[keep], mean, color=_colour(c), label=sweep.label(config))
+        ax.fill_between(mid[keep], mean - spread, mean + spread, color=_colour(c), alpha=0.12, lw=0)
+    _log_x(ax)
+    if sweep.reference:
+        ax.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"off-lattice reference {sweep.reference}")
+    ax.set_xlabel("box side s")
+    ax.set_ylabel("-d ln N / d ln s (mean ± std over seeds)")
+    ax.set_title(f"Box-counting local slope at N={sweep.counts[-1]}", fontsize=9)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     _save(fig, path)
-    return ("Left: the local slope D_eff(n) of the seed-averaged growth history over each octave of n, with its "
-            "bootstrap 95% band, and D_inf with its CI where the extrapolation D_eff = D_inf + a n^-w holds. "
-            "Right: the box-counting local slope, which falls towards the cluster size (the low bias).")
+    extra = f" (first 10 of {len(sweep.configs)} configurations)" if len(sweep.configs) > 10 else ""
+    return ("The box-counting local slope between adjacent sides, up to the largest fitted window" + extra + ": "
+            "it rises from the particle scale and falls towards the cluster size, which is why box counting on "
+            "one finite cluster reads low. The mass-radius local slope D_eff(n) is in `dimension_vs_n`.")
 
 
 def _dimension_vs_n(sweep, path):
@@ -687,7 +673,7 @@ def _write_report(sweep, figures, path) -> Path:
         "is flat within its own uncertainty. The CI is a bootstrap over seeds with that window fixed; no "
         "cluster is left out for its own fit. A window whose local slope is not flat is marked.",
         "- **Local slope and D_inf**: D_eff(n) over each octave of n with its bootstrap band (figure "
-        "`local_slopes`); D_inf fits D_eff = D_inf + a n^-w over independent octaves and is given only when "
+        "`dimension_vs_n`); D_inf fits D_eff = D_inf + a n^-w over independent octaves and is given only when "
         "that model describes the data and pins D_inf down.",
         "- **Box counting** on one finite cluster reads low: boxes at the cluster's edge are partly empty. "
         "Each cluster's fit gives a standard error that includes the drift of its local slope; the table "
