@@ -27,6 +27,8 @@ FAILURE_AXES = ("kill_factor", "step", "size", "stickiness")
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
 _MAX_PANELS = 12
+_MIN_WIDTH = 6.5
+"""Inches: the narrowest figure, whatever its panels."""
 
 
 def report(ds, outdir) -> list:
@@ -198,7 +200,8 @@ def _figure(n_panels=1, width=4.0, height=3.4):
 
     cols = min(n_panels, 4)
     rows = -(-n_panels // cols)
-    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
+    # A one-panel figure still needs room for its title and a legend below it.
+    fig = Figure(figsize=(max(width * cols, _MIN_WIDTH), height * rows), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
     for ax in axes[n_panels:]:
         ax.set_visible(False)
@@ -283,7 +286,7 @@ def _box_counts(sweep, path):
         ax.set_xlabel("box side s")
         ax.set_ylabel("boxes N(s)")
         ax.legend(fontsize=7)
-    fig.suptitle(f"Box counts at N={sweep.counts[last]} (grey: all seeds; shaded: seed 0's fitted range)")
+    fig.suptitle(f"Box counts at N={sweep.counts[last]}\n(grey: all seeds; shaded: seed 0's fitted range)", fontsize=9)
     _save(fig, path)
     return ("Box counts N(s) at the largest count, every seed in grey, seed 0 with the fitted line over the "
             "range the fit chose (shaded; orange when its local slope is not flat). A finite-cluster estimate: "
@@ -449,7 +452,7 @@ def _diffusion_times(sweep, path):
     hist.set_yscale("log")
     hist.set_xlabel("diffusion time (walk steps or jumps to stick)")
     hist.set_ylabel("density")
-    hist.legend(fontsize=6)
+    fig.legend(*hist.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     depth.set_xlabel("distance from seed / cluster radius")
     depth.set_ylabel("median diffusion time")
     fig.suptitle("Diffusion times, pooled over seeds")
@@ -606,8 +609,8 @@ def _failure(sweep, path):
                 _log_x(panel)
             panel.set_ylabel(f"{label} (95% CI)")
             panel.legend(fontsize=6, loc="best")
-    fig.suptitle(f"Where methods fail, at N={sweep.counts[last]}: one parameter varied, the rest exact "
-                 "(numbers: bias in units of the combined 95% CI half-width)")
+    fig.suptitle(f"Where methods fail, at N={sweep.counts[last]}: one parameter varied, the rest exact\n"
+                 "(numbers: bias in units of the combined 95% CI half-width)", fontsize=9)
     _save(fig, path)
     return ("D and Rg/R_max against each parameter that breaks the model or its measurement ("
             + ", ".join(axes_present) + "), the others held at the exact method. The grey band is the exact "
