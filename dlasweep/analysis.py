@@ -17,10 +17,13 @@ cluster of its own fit), a finite-cluster estimate that reads low.
 
 from __future__ import annotations
 
+from dataclasses import replace
+from functools import cached_property
+
 import numpy as np
 import xarray as xr
 
-from .fit import ensemble, fit_dimension, fit_mass_radius, mass_radius_counts
+from .fit import Fit, ensemble, fit_dimension, fit_mass_radius, mass_radius_counts
 from .measure import radius_of_gyration
 from .params import STATUSES
 
@@ -29,7 +32,8 @@ HISTORY_START = 50
 LOCAL_PER_OCTAVE = 8
 """Counts per octave on the local-slope curve."""
 RESAMPLES = 1000
-"""Bootstrap resamples over seeds, from ``numpy.random.default_rng(0)`` so that reruns agree."""
+"""Bootstrap resamples over seeds. Each interval draws its own stream (``_stream``), so that
+reruns agree and a statistic does not depend on which others were computed before it."""
 EXPONENTS = (0.25, 0.5, 0.75, 1.0)
 """Correction exponents w tried for D_eff(n) = D_inf + a n**-w."""
 MAX_CHI2 = 2.0
@@ -87,6 +91,7 @@ _ATTRS = {
     "seconds_per_particle": "mean wall time per particle to grow to N",
     "steps_per_particle": "mean walk steps per particle to grow to N",
     "status_count": "clusters with each growth status at N",
+    "cluster_index": "position on the sweep's cluster dimension of this seed's stored cluster, -1 if none",
     "D_vs_exact": "D minus D of the exact method (other parameters equal) at equal N",
     "D_vs_exact_half_width": "95% CI half-width of D_vs_exact (both CIs in quadrature)",
     "rg_mean_vs_exact": "rg_mean over rg_mean of the exact method, minus 1, at equal N",
@@ -132,24 +137,34 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     return sweep.dataset(out, resamples)
 
 
-def exact_reference(ds, config_dims, config):
-    """The configuration with every swept method axis at its exact value (``EXACT_METHOD``), or None."""
+def config_dims(ds) -> list:
+    """The dims that name a configuration of a sweep: the swept parameters (spec order), then ``size``."""
+    return [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+
+
+def method_axes(ds) -> list:
+    """The swept parameters that switch an approximation on or off (``EXACT_METHOD``'s, with several values)."""
+    return [name for name in EXACT_METHOD if name in config_dims(ds) and ds.sizes[name] > 1]
+
+
+def exact_reference(ds, config):
+    """The configuration (indices on ``config_dims``) with every method axis at its exact value, or None."""
+    dims = config_dims(ds)
     reference = list(config)
-    for name in config_dims:
-        if name in EXACT_METHOD and ds.sizes[name] > 1:
-            exact = [i for i, v in enumerate(ds[name].values) if _key(v) == EXACT_METHOD[name]]
-            if not exact:
-                return None
-            reference[config_dims.index(name)] = exact[0]
+    for name in method_axes(ds):
+        exact = [i for i, v in enumerate(ds[name].values) if _key(v) == EXACT_METHOD[name]]
+        if not exact:
+            return None
+        reference[dims.index(name)] = exact[0]
     return tuple(reference)
 
 
 def _against_exact(sweep, out):
     """Each configuration's departure from the exact method at equal N, with its 95% CI half-width."""
-    if not any(d in EXACT_METHOD and sweep.ds.sizes[d] > 1 for d in sweep.config_dims):
+    if not method_axes(sweep.ds):
         return
     for config in np.ndindex(*sweep.shape):
-        ref = exact_reference(sweep.ds, sweep.config_dims, config)
+        ref = exact_reference(sweep.ds, config)
         if ref is None:
             continue
         if ref == config:
@@ -191,22 +206,14 @@ class _Sweep:
 
     def __init__(self, ds):
         self.ds = ds
-        self.config_dims = [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+        self.config_dims = config_dims(ds)
         self.shape = tuple(ds.sizes[d] for d in self.config_dims)
         self.counts = ds["n_particles"].values.astype(np.int64)
         self.scales = ds["scale"].values
-        top = int(ds["diffusion_time"].max()) if ds.sizes.get("particle", 0) else 1
-        # Half-integer edges: times are whole steps, and log bins narrower than one step alias.
-        self.time_edges = np.r_[0.5, np.unique(np.round(np.logspace(0, np.log10(max(top, 10)), 40))) + 0.5]
         self.n_counts, self.n_seeds = len(self.counts), ds.sizes["seed"]
         self.history = _history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
-        self.extra = {"n_particles": self.n_counts, "seed": self.n_seeds, "n_local": len(self.octaves),
-                      "n_history": len(self.history),
-                      "scale_mid": len(self.scales) - 1, "diffusion_bin": len(self.time_edges) - 1,
-                      "depth_bin": len(DEPTH_EDGES) - 1, "status": len(STATUSES)}
-        """Sizes of the dims a summary has beside the configuration's."""
         self.layout = {
             **{name: ("n_particles",) for name in (
                 "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
@@ -224,10 +231,26 @@ class _Sweep:
             "rg_history": ("n_history",),
             **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
             "status_count": ("n_particles", "status"),
+            "cluster_index": ("seed",),
         }
         """Every float summary variable -> its dims beside the configuration's."""
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
+
+    @cached_property
+    def time_edges(self):
+        """Edges of the diffusion-time histogram, from one step to the longest time stored."""
+        top = int(self.ds["diffusion_time"].max()) if self.ds.sizes.get("particle", 0) else 1
+        # Half-integer edges: times are whole steps, and log bins narrower than one step alias.
+        return np.r_[0.5, np.unique(np.round(np.logspace(0, np.log10(max(top, 10)), 40))) + 0.5]
+
+    @cached_property
+    def extra(self):
+        """Sizes of the dims a summary has beside the configuration's."""
+        return {"n_particles": self.n_counts, "seed": self.n_seeds, "n_local": len(self.octaves),
+                "n_history": len(self.history), "scale_mid": len(self.scales) - 1,
+                "diffusion_bin": len(self.time_edges) - 1, "depth_bin": len(DEPTH_EDGES) - 1,
+                "status": len(STATUSES)}
 
     def _cluster_index(self):
         """(configuration, seed index) -> position on ``cluster``."""
@@ -260,8 +283,10 @@ class _Sweep:
         dims["D_reason"], dims["D_inf_reason"] = base + ("n_particles",), base
         data = {}
         for name, values in out.items():
-            if name.endswith("_ok") or name in ("D_seeds", "status_count", "pareto"):
-                values = np.nan_to_num(values).astype(np.int64 if name in ("D_seeds", "status_count") else np.int8)
+            if name in ("D_seeds", "status_count", "cluster_index"):
+                values = np.nan_to_num(values, nan=-1 if name == "cluster_index" else 0).astype(np.int64)
+            elif name.endswith("_ok") or name == "pareto":
+                values = np.nan_to_num(values).astype(np.int8)
             data[name] = (dims[name], values, {"long_name": _ATTRS[name]})
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
         coords["n_history"] = self.history
@@ -298,18 +323,17 @@ def _config(sweep, config, out, resamples):
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]
     grid = np.unique(np.concatenate([sweep.history, *needed]))
     curves = _per_cluster(sweep, config, cell, grid, out)
-    rng = np.random.default_rng(0)
     for k, n in enumerate(sweep.counts):
         reached = cell["n_grown"][k] == n
         _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
-               rng, resamples)
+               resamples)
     with np.errstate(divide="ignore", invalid="ignore"):
         slopes = -np.diff(np.log(cell["box_count"][-1].astype(float)), axis=-1) / np.diff(np.log(sweep.scales))
     grown = cell["n_grown"][-1] > 0
     if grown.any():
         out["box_slope"][config], out["box_slope_std"][config] = slopes[grown].mean(0), slopes[grown].std(0)
     alive = (cell["n_grown"][-1] == sweep.counts[-1]) & np.isfinite(curves[:, -1])
-    _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, rng, resamples)
+    _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, resamples)
 
 
 def _per_cluster(sweep, config, cell, grid, out):
@@ -317,6 +341,7 @@ def _per_cluster(sweep, config, cell, grid, out):
     curves = np.full((sweep.n_seeds, len(grid)), np.nan)
     times, depths = [], []
     for s in range(sweep.n_seeds):
+        out["cluster_index"][config][s] = sweep.clusters.get((config, s), -1)
         points = sweep.points(config, s)
         if points is not None:
             rg = radius_of_gyration(points)
@@ -345,7 +370,7 @@ def _per_cluster(sweep, config, cell, grid, out):
     return curves
 
 
-def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resamples):
+def _count(sweep, config, k, n, reached, cell, curves, counts, out, resamples):
     """Statistics at one count: headline D, box-counting D, Rg, costs, statuses."""
     o = {name: values[(*config, ...)] for name, values in out.items()}
     o["status_count"][k] = np.bincount(cell["status"][k].astype(np.int64), minlength=len(STATUSES))
@@ -367,24 +392,57 @@ def _count(sweep, config, k, n, reached, cell, curves, counts, out, rng, resampl
     o["D_seed_std"][k] = ensemble(np.where(reached, o["D_cluster"][k], np.nan)).std
     use = reached & np.isfinite(curves).all(axis=1)
     o["D_seeds"][k] = use.sum()
-    if not use.any():
-        o["D_reason"][k] = "no stored cluster reached this count"
-        return
-    curves = curves[use]
-    fit = fit_mass_radius(curves.mean(axis=0), counts)
-    o["D"][k], o["D_drift"][k], o["D_ok"][k] = fit.D, fit.drift, fit.ok
+    fit, o["D_ci_lo"][k], o["D_ci_hi"][k] = _headline(curves[use], counts, _stream("D", n), resamples)
+    o["D"][k], o["D_drift"][k], o["D_ok"][k], o["D_reason"][k] = fit.D, fit.drift, fit.ok, fit.reason
     o["D_range_lo"][k], o["D_range_hi"][k] = fit.range_lo, fit.range_hi
-    o["D_reason"][k] = fit.reason
+
+
+def _headline(curves, counts, rng, resamples):
+    """The ensemble fit of ``counts`` against the mean of ``curves`` (a row per cluster), and its 95% CI."""
+    if len(curves) == 0:
+        return Fit(*[np.nan] * 6, 0, np.nan, False, "no stored cluster reached this count"), np.nan, np.nan
+    fit = fit_mass_radius(curves.mean(axis=0), counts)
     if len(curves) < 2 or not np.isfinite(fit.D):
-        o["D_reason"][k] = fit.reason or "one cluster: no interval over seeds"
-        return
+        return replace(fit, reason=fit.reason or "one cluster: no interval over seeds"), np.nan, np.nan
     window = (counts >= fit.range_lo) & (counts <= fit.range_hi)
-    means = _resampled_means(curves[:, window], rng, resamples)
-    slopes = _slopes(np.log(means), np.log(counts[window]))
-    o["D_ci_lo"][k], o["D_ci_hi"][k] = np.percentile(slopes, [2.5, 97.5])
+    slopes = _slopes(np.log(_resampled_means(curves[:, window], rng, resamples)), np.log(counts[window]))
+    ci_lo, ci_hi = np.percentile(slopes, [2.5, 97.5])
+    return fit, ci_lo, ci_hi
 
 
-def _local(sweep, config, curves, out, rng, resamples):
+def headline(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
+    """The headline D at the largest count and its 95% CI, per configuration: what a precision target watches.
+
+    The same numbers as ``summarise(ds)`` at the largest count, without the
+    per-cluster fits and the rest of the summary.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``D``, ``D_ci_lo``, ``D_ci_hi`` on the configuration dims.
+    """
+    sweep = _Sweep(ds)
+    n = int(sweep.counts[-1])
+    counts = mass_radius_counts(n)
+    out = {name: np.full(sweep.shape, np.nan) for name in ("D", "D_ci_lo", "D_ci_hi")}
+    for config in np.ndindex(*sweep.shape):
+        reached = ds["n_grown"][{**dict(zip(sweep.config_dims, config)), "n_particles": -1}].values == n
+        stored = (sweep.points(config, s) for s in np.flatnonzero(reached))
+        curves = [radius_of_gyration(points)[counts - 1] for points in stored if points is not None]
+        fit, out["D_ci_lo"][config], out["D_ci_hi"][config] = _headline(
+            np.array(curves).reshape(len(curves), len(counts)), counts, _stream("D", n), resamples)
+        out["D"][config] = fit.D
+    coords = {d: ds[d].values for d in sweep.config_dims}
+    return xr.Dataset({name: (sweep.config_dims, values, {"long_name": _ATTRS[name]}) for name, values in out.items()},
+                      coords=coords)
+
+
+def _stream(statistic, n):
+    """The bootstrap stream of one statistic at count ``n``."""
+    return np.random.default_rng([sum(map(ord, statistic)), int(n)])
+
+
+def _local(sweep, config, curves, out, resamples):
     """Local slopes of the ensemble curve with their band, and the extrapolation D_inf."""
     o = {name: values[(*config, ...)] for name, values in out.items()}
     if len(curves):
@@ -394,7 +452,7 @@ def _local(sweep, config, curves, out, rng, resamples):
         return
     log_n = np.log(sweep.history)
     mean = np.log(curves.mean(axis=0))
-    boot = np.log(_resampled_means(curves, rng, resamples))
+    boot = np.log(_resampled_means(curves, _stream("D_local", sweep.counts[-1]), resamples))
     local = np.array([_slopes(mean[None, w], log_n[w])[0] for w in sweep.octaves])
     band = np.array([_slopes(boot[:, w], log_n[w]) for w in sweep.octaves])
     o["D_local"][:] = local

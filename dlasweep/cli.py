@@ -235,9 +235,10 @@ def _sweep_info(ds) -> list:
              "fixed: " + " ".join(f"{name}={_text(ds[name].values)}" for name in fixed),
              f"clusters: {ds.sizes['cluster']} stored, {ds.sizes['particle']} particles",
              "status (clusters at each count):"]
+    full = summarise(ds)
+    tally = full["status_count"].sum([d for d in full["status_count"].dims if d not in ("n_particles", "status")])
     for n in ds["n_particles"].values:
-        codes = ds["status"].sel(n_particles=n).values.ravel()
-        counts = np.bincount(codes, minlength=len(store.STATUS_FLAGS))
+        counts = tally.sel(n_particles=n).values
         lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(store.STATUS_FLAGS, counts) if k))
     failed = [task for task in ds.attrs.get("failed_tasks", "").split("; ") if task]
     lines += [f"failed tasks: {len(failed) or 'none'}", *(f"  {task}" for task in failed)]
@@ -245,7 +246,7 @@ def _sweep_info(ds) -> list:
         lines.append(f"stopped: {ds.attrs['stop_reason']} (target_ci {ds.attrs['target_ci']}, "
                      f"max_seeds {ds.attrs['max_seeds']})")
 
-    summary = summarise(ds).isel(n_particles=-1)
+    summary = full.isel(n_particles=-1)
     config = list(summary["D_inf"].dims)
     header = [*config, "N", "seeds", "D", "95% CI", "D_inf"]
     rows = []

@@ -320,17 +320,20 @@ def fit_mass_radius(
         (``dlasweep.summarise``).
     """
     rg = np.asarray(rg, dtype=np.float64).ravel()
-    n = np.arange(1, len(rg) + 1, dtype=np.float64) if n is None else np.asarray(n, dtype=np.float64).ravel()
-    if n.shape != rg.shape:
-        raise ValueError(f"n and rg differ in length: {len(n)} and {len(rg)}")
-    if len(n) == 0:
+    if n is not None:
+        n = np.asarray(n, dtype=np.float64).ravel()
+        if n.shape != rg.shape:
+            raise ValueError(f"n and rg differ in length: {len(n)} and {len(rg)}")
+    if len(rg) == 0:
         nan = np.nan
         return Fit(nan, nan, nan, nan, nan, nan, 0, nan, False, "no data")
-    targets = mass_radius_counts(int(n[-1]), start_fraction=start_fraction, min_count=min_count,
-                                 per_octave=per_octave)
-    picks = np.unique(np.clip(np.searchsorted(n, targets), 0, len(n) - 1))
+    n_max = len(rg) if n is None else int(n[-1])
+    targets = mass_radius_counts(n_max, start_fraction=start_fraction, min_count=min_count, per_octave=per_octave)
+    # Every prefix's Rg (the default) is indexed by its count; other histories are searched.
+    picks = targets - 1 if n is None else np.unique(np.clip(np.searchsorted(n, targets), 0, len(n) - 1))
     picks = picks[rg[picks] > 0]
-    return _scaling_fit(np.log(rg[picks]), np.log(n[picks]), n[picks], np.zeros(len(picks), np.int64), 1.0,
+    counts = picks + 1.0 if n is None else n[picks]
+    return _scaling_fit(np.log(rg[picks]), np.log(counts), counts, np.zeros(len(picks), np.int64), 1.0,
                         min_decades=min_decades,
                         min_points=min_points, flat_tolerance=flat_tolerance, unit="N")
 

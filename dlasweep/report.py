@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import EXACT_METHOD, exact_reference, summarise
+from .analysis import EXACT_METHOD, config_dims, exact_reference, method_axes, summarise
 from .pictures import draw_points
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
@@ -67,7 +67,7 @@ class _Sweep:
     def __init__(self, ds):
         self.ds = ds
         self.s = summarise(ds)
-        self.config_dims = [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+        self.config_dims = config_dims(ds)
         self.params = [d for d in self.config_dims if d != "size"]
         self.counts = ds["n_particles"].values
         self.status_names = list(self.s["status"].values)
@@ -76,13 +76,20 @@ class _Sweep:
         self.configs = list(np.ndindex(*(ds.sizes[d] for d in self.config_dims)))
         # Lattice clusters cross over to axis-aligned growth: the off-lattice value is not theirs.
         self.reference = None if self.lattice else REFERENCE_D.get(self.dim)
+        self.methods = method_axes(ds)
+        self._rows = {}
 
     def at(self, name, config, **index):
         """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
         return self.s[name][{**dict(zip(self.config_dims, config)), **index}].values
 
     def row(self, config, k) -> dict:
-        """One line of the summary table."""
+        """One line of the summary table (built once)."""
+        if (config, k) not in self._rows:
+            self._rows[config, k] = self._row(config, k)
+        return self._rows[config, k]
+
+    def _row(self, config, k) -> dict:
         row = {name: _plain(self.ds[name].values[i]) for name, i in zip(self.config_dims, config)}
         tally = self.at("status_count", config, n_particles=k)
         row.update(n_particles=int(self.counts[k]), seeds=int(tally.sum()),
@@ -113,13 +120,8 @@ class _Sweep:
 
     def cluster_of(self, config, seed):
         """Position on ``cluster`` of a configuration's cluster, or None when it is not stored."""
-        if "cluster_particles" not in self.ds:
-            return None
-        match = self.ds["cluster_seed"].values == self.ds["seed"].values[seed]
-        for name, i in zip(self.config_dims, config):
-            match &= self.ds[f"cluster_{name}"].values == self.ds[name].values[i]
-        found = np.flatnonzero(match)
-        return int(found[0]) if len(found) else None
+        index = int(self.at("cluster_index", config, seed=seed))
+        return None if index < 0 else index
 
 
 def _cluster_points(ds, i):
@@ -461,10 +463,6 @@ def _diffusion_times(sweep, path):
             "stuck, as a fraction of the cluster's radius (right).")
 
 
-def _method_axes(sweep):
-    return [a for a in EXACT_METHOD if a in sweep.config_dims and sweep.ds.sizes[a] > 1]
-
-
 _SHORTCUTS = {"kill_factor": "kill circle", "jumps": "single steps", "step": "Gaussian steps", "size": "finite box"}
 """The name of the shortcut each method axis takes away from the exact method."""
 _MARKERS = "*osD^vP<>Xph"
@@ -485,9 +483,9 @@ def _variant(sweep, config, methods) -> str:
 
 
 def _speed_accuracy(sweep, path):
-    methods = _method_axes(sweep)
+    methods = sweep.methods
     last = len(sweep.counts) - 1
-    pairs = [(c, exact_reference(sweep.ds, sweep.config_dims, c)) for c in sweep.configs]
+    pairs = [(c, exact_reference(sweep.ds, c)) for c in sweep.configs]
     pairs = [(c, r) for c, r in pairs if r is not None]
     if not methods or all(c == r for c, r in pairs):
         return None
@@ -511,7 +509,7 @@ def _speed_accuracy(sweep, path):
                 ax.errorbar(row["seconds_per_particle"], y, yerr=np.nan_to_num(err), label=label, **style)
             else:
                 _mark_missing(ax, [row["seconds_per_particle"]], [y])
-    front = [sweep.row(c, last) for c, _ in pairs if sweep.row(c, last)["pareto"]]
+    front = [row for row in (sweep.row(c, last) for c, _ in pairs) if row["pareto"]]
     front.sort(key=lambda r: r["seconds_per_particle"])
     if len(front) > 1:
         dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
@@ -543,7 +541,7 @@ def _verdict(value, half) -> str:
 
 def _deviation_table(sweep) -> list:
     """Markdown lines: every variant against the exact method at the largest N."""
-    methods = _method_axes(sweep)
+    methods = sweep.methods
     last = len(sweep.counts) - 1
     rows = [sweep.row(c, last) for c in sweep.configs]
     if not methods or not any(np.isfinite(r["rg_mean_vs_exact"]) for r in rows):
@@ -554,7 +552,7 @@ def _deviation_table(sweep) -> list:
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
                                 "Rg/Rmax - exact"]) + " |", "|" + "---|" * (len(sweep.config_dims) + 3)]
     for config, r in zip(sweep.configs, rows):
-        exact = exact_reference(sweep.ds, sweep.config_dims, config) == config
+        exact = exact_reference(sweep.ds, config) == config
         cells = [str(r[d]) for d in sweep.config_dims] + [
             "exact (reference)" if exact else _verdict(r[f"{name}_vs_exact"], r[f"{name}_vs_exact_half_width"])
             for name in ("D", "rg_mean", "rg_over_rmax")]
@@ -568,7 +566,7 @@ def _failure(sweep, path):
         return None
     last = len(sweep.counts) - 1
     fig, panels = _figure(2 * len(axes_present), 4.0, 3.3)
-    base = exact_reference(sweep.ds, sweep.config_dims, sweep.configs[0]) or sweep.configs[0]
+    base = exact_reference(sweep.ds, sweep.configs[0]) or sweep.configs[0]
     for p, axis in enumerate(axes_present):
         a = sweep.config_dims.index(axis)
         exact_value = EXACT_METHOD.get(axis)
@@ -640,6 +638,7 @@ def _write_report(sweep, figures, path) -> Path:
     ds = sweep.ds
     last = len(sweep.counts) - 1
     rows = [(sweep.label(c), sweep.row(c, last)) for c in sweep.configs]
+    deviations = _deviation_table(sweep)
     attrs = sweep.s.attrs
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
@@ -682,7 +681,7 @@ def _write_report(sweep, figures, path) -> Path:
         "Each cluster's fit gives a standard error that includes the drift of its local slope; the table "
         "gives the mean over every cluster and the share of fits that are flat.",
         "",
-        *(["## Against the exact method", "", *_deviation_table(sweep)] if _deviation_table(sweep) else []),
+        *(["## Against the exact method", "", *deviations] if deviations else []),
         "## Summary table",
         "",
         "(Also in `summary.csv` with every column; ⚠ marks a configuration where a cluster stopped early.)",

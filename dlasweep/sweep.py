@@ -19,8 +19,8 @@ flat files that are mapped, not loaded, so memory holds one part at a time.
 This is the only module that knows dask.
 
 Precision on demand (``[run] target_ci``): the seeds of the spec are a first
-batch. After each batch the dataset is assembled and summarised
-(``analysis.summarise``); while the 95% CI half-width of the headline D at
+batch. After each batch the dataset is assembled and its headline D
+measured (``analysis.headline``); while the 95% CI half-width of the headline D at
 the largest count is above the target for some configuration (NaN counts as
 above) and fewer than ``max_seeds`` seeds are grown, every configuration
 gets more seeds, replicates n..m-1 (``_more_seeds`` says how many). Replicate
@@ -54,7 +54,7 @@ from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 
 from . import measure, store
-from .analysis import summarise
+from .analysis import headline
 from .grow import grow
 from .kernels import lattice, offlattice
 from .params import STATUSES
@@ -163,10 +163,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
 def _ci_half_width(ds):
     """Half-width of the 95% CI of the headline D at the largest count, per configuration.
 
-    NaN where ``summarise`` cannot give the interval (too few seeds or too
-    small clusters).
+    NaN where there is no interval (too few seeds or too small clusters).
     """
-    top = summarise(ds).isel(n_particles=-1)
+    top = headline(ds)
     return ((top["D_ci_hi"] - top["D_ci_lo"]) / 2).reset_coords(drop=True)
 
 

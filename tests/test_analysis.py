@@ -110,3 +110,12 @@ def test_per_cluster_error_bars_hold_against_the_ensemble(offlattice):
             broken += abs(fit.D - truth) > 3 * fit.stderr + 0.02
     assert len(z) >= 18 and broken <= 2
     assert 0.6 < np.std(z) < 1.6, np.std(z)
+
+
+def test_the_headline_a_target_watches_is_the_summary_s(offlattice):
+    from dlasweep.analysis import headline
+
+    ds, s = offlattice
+    top, last = headline(ds), s.isel(n_particles=-1)
+    for name in ("D", "D_ci_lo", "D_ci_hi"):
+        np.testing.assert_array_equal(top[name].values, last[name].values)
