@@ -1,7 +1,7 @@
 PY := .venv/bin/python
 STAMP := .venv/.installed
 
-.PHONY: sweep test bench clean
+.PHONY: sweep test test-slurm bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -16,6 +16,10 @@ sweep: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest
+
+# The launcher on a one-node SLURM started for the test (as root; apt installs slurm-wlm and munge if missing).
+test-slurm: $(STAMP)
+	$(PY) -m pytest tests/test_slurm.py
 
 bench: $(STAMP)
 	.venv/bin/dlasweep bench -o results/bench
