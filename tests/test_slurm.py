@@ -158,10 +158,12 @@ def slow_reference():
 class Launcher:
     """workflows/slurm.py as a process of its own, its stderr in a file."""
 
-    def __init__(self, slurm, folder: Path, spec, *options, name="launcher"):
+    def __init__(self, slurm, folder: Path, spec, *options, name="launcher", path=None):
         self.out = folder / "out.nc"
         self.log = folder / f"{name}.log"
         env = dict(slurm.env, PYTHONPATH=os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
+        if path:
+            env["PATH"] = f"{path}{os.pathsep}{env['PATH']}"
         argv = [sys.executable, ROOT / "workflows" / "slurm.py", spec, "-o", self.out, "--cores", slurm.cpus,
                 "--memory", "1GB", "--walltime", "10:00", "--interface", "lo", "--log-every", "1",
                 "--log-dir", folder / "slurm-logs", *options]
@@ -297,6 +299,7 @@ def test_ctrl_c_mid_sweep_exits_130_keeps_finished_tasks_and_resume_completes(qu
     (["--cores", "99"], "--cores 99: partition debug has at most {cpus} CPUs per node"),
     (["--partition", "nosuch"], "--partition nosuch: no such partition (sinfo)"),
     (["--memory", "100TB"], "--memory 100TB: partition debug has at most"),
+    (["--sbatch=--constraint=nosuch"], "sbatch refuses the job: allocation failure: Invalid feature specification"),
 ])
 def test_options_beyond_the_partition_exit_2_and_submit_nothing(argv, message, queue, tmp_path):
     before = queue.jobs()
@@ -306,3 +309,20 @@ def test_options_beyond_the_partition_exit_2_and_submit_nothing(argv, message, q
     assert line.startswith(f"slurm.py: {message.format(cpus=queue.cpus)}") and line.count("\n") == 1, line
     assert queue.jobs() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["launcher.log"]
+
+
+@pytest.mark.slow
+def test_a_failing_sbatch_stops_the_launcher_with_exit_1(queue, tmp_path):
+    """sbatch that passes the up-front ``--test-only`` check, then fails (a full queue, a lost controller)."""
+    shim = tmp_path / "bin"
+    shim.mkdir()
+    (shim / "sbatch").write_text(f"""#!/bin/sh
+case "$1" in --test-only) exec {queue.run("which", "sbatch").stdout.strip()} "$@";; esac
+echo "sbatch: error: Batch job submission failed: simulated" >&2
+exit 1
+""")
+    (shim / "sbatch").chmod(0o755)
+    with Launcher(queue, tmp_path, QUICK, path=shim) as run:
+        assert run.wait(60) == 1, run.text()
+    assert "stopped: submitting a job failed: sbatch: error: Batch job submission failed: simulated" in run.text()
+    assert "jobs submitted: 0" in run.text()

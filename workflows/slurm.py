@@ -34,6 +34,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -156,7 +157,7 @@ def _check_partition(args):
     except (OSError, subprocess.TimeoutExpired) as err:
         raise UsageError(f"sinfo: cannot ask SLURM for its partitions ({err})") from None
     if listed.returncode:
-        raise UsageError(f"sinfo: {' '.join(listed.stderr.split()) or 'failed'}")
+        raise UsageError(f"sinfo failed: {_last_line(listed.stderr)}")
     cpus, memory_mb = {}, {}
     for line in listed.stdout.splitlines():
         name, node_cpus, node_mb = line.split()
@@ -175,6 +176,22 @@ def _check_partition(args):
     if parse_bytes(args.memory) > memory_mb[partition] * 2**20:
         raise UsageError(f"--memory {args.memory}: partition {partition} has at most "
                          f"{memory_mb[partition]} MB per node")
+
+
+def _check_job(script: str):
+    """Ask SLURM whether it would take the job script (``sbatch --test-only``: nothing is submitted)."""
+    with tempfile.NamedTemporaryFile("w", suffix=".sh") as file:
+        file.write(script)
+        file.flush()
+        tried = subprocess.run(["sbatch", "--test-only", file.name], check=False, capture_output=True,
+                               text=True, timeout=30)
+    if tried.returncode:
+        raise UsageError(f"sbatch refuses the job: {_last_line(tried.stderr)}")
+
+
+def _last_line(text: str) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else "no message"
 
 
 def _scheduler_host(args) -> str | None:
@@ -243,6 +260,7 @@ def _slurm_classes(log: _Log):
     """A SLURM job class that logs and records its job, a scheduler plugin that logs workers and
     tasks, and the adaptive policy (built here: dask-jobqueue is imported only when needed)."""
     from dask_jobqueue.slurm import SLURMJob
+    from distributed.core import Status
     from distributed.deploy.adaptive import Adaptive
     from distributed.diagnostics.plugin import SchedulerPlugin
 
@@ -251,15 +269,17 @@ def _slurm_classes(log: _Log):
             try:
                 await super().start()
             except Exception as err:
+                self.status = Status.failed  # so that the cluster can close
                 if log.sbatch_error is None:
-                    log.sbatch_error = " ".join(str(err).split())
+                    log.sbatch_error = _last_line(str(err))
                     _thread.interrupt_main()  # the sweep waits in the main thread: stop it
                 raise
             log.submitted.append(self.job_id)
             log.line(f"job {self.job_id} submitted (worker {self.name})")
 
         async def close(self):
-            log.line(f"job {self.job_id}: scancel (worker {self.name})")
+            if self.job_id:
+                log.line(f"job {self.job_id}: scancel (worker {self.name})")
             await super().close()
 
     class Progress(SchedulerPlugin):
@@ -334,10 +354,16 @@ def main(argv=None) -> int:
         return 2
     log = _Log(args.log_every, on_terminal=sys.stderr.isatty())
     LoggedJob, Progress, OneJobWaiting = _slurm_classes(log)
+    address = f"tcp://{host or socket.gethostname()}:PORT"
+    script = LoggedJob(scheduler=address, name=f"{JOB_NAME}-worker", **job_options(args)).job_script()
     if args.dry_run:
-        address = f"tcp://{host or socket.gethostname()}:PORT"
-        print(LoggedJob(scheduler=address, name=f"{JOB_NAME}-worker", **job_options(args)).job_script())
+        print(script)
         return 0
+    try:
+        _check_job(script)
+    except UsageError as err:
+        print(f"slurm.py: {err}", file=sys.stderr)
+        return 2
     # Ctrl-C and SIGTERM raise KeyboardInterrupt: the sweep then says how to resume, jobs are cancelled.
     signal.signal(signal.SIGINT, log.interrupted)
     signal.signal(signal.SIGTERM, log.interrupted)
