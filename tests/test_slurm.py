@@ -69,6 +69,19 @@ def test_lifetime_ends_every_worker_before_its_walltime():
         launcher.lifetime(launcher.MIN_WALLTIME - 1)
 
 
+@pytest.mark.parametrize("wanted, arrived, planned, busy, hold", [
+    (0, 0, 0, False, 0),   # no work yet: no job (a refused sweep submits nothing)
+    (10, 0, 0, True, 1),   # work for ten: one job first
+    (10, 0, 1, True, 1),   # it waits in the queue: no second one, and it is not cancelled
+    (10, 1, 1, True, 2),   # it runs: one more may wait
+    (0, 1, 2, True, 2),    # dask wants fewer before task durations are known: the waiting job stays
+    (0, 2, 2, True, 1),    # the work is done: idle workers may go, one stays
+    (3, 0, 2, True, 2),    # both workers lost (scancel): both replaced
+])
+def test_jobs_to_hold_keeps_one_job_waiting_and_cancels_none(wanted, arrived, planned, busy, hold):
+    assert launcher.jobs_to_hold(wanted, arrived, planned, busy) == hold
+
+
 def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch, capsys):
     from distributed import Scheduler
 

@@ -10,11 +10,12 @@ The dask scheduler runs in this process (run it on a login node or in a
 small job of its own); the sweep is ``dlasweep sweep --scheduler ADDRESS``,
 with its checks, messages and exit status. Each SLURM job runs one dask
 worker with ``--cores`` threads: the kernels release the GIL, and dask
-notices at once when a one-worker job ends (``scancel``, preemption, the end
-of its wall time), so the job is replaced. Jobs are added as tasks wait, one
-at a time: at most one job waits in the queue, and a waiting job is never
-cancelled to be resubmitted (it would lose its place). Once the sweep has
-work, one job is kept. A worker retires before its wall time runs out
+notices when a one-worker job ends (``scancel``, preemption, the end of its
+wall time) and submits a replacement (after its lost-worker timeout, 15 s
+by default). Jobs are added as tasks wait, one at a time: at most one job
+waits in the queue, and a waiting job is not cancelled to be resubmitted
+(it would lose its place; see ``jobs_to_hold``). Once the sweep has work,
+one job is kept. A worker retires before its wall time runs out
 (lifetime and stagger derived from ``--walltime``), so SLURM never cuts a
 task off; dask runs it elsewhere. Each finished task is saved as it
 arrives, so an interrupted run continues with ``--resume``. On any exit
@@ -227,6 +228,18 @@ def job_options(args) -> dict:
     }
 
 
+def jobs_to_hold(wanted: int, arrived: int, planned: int, busy: bool) -> int:
+    """How many worker jobs to hold, given how many dask wants, how many have arrived (their worker
+    connected) and how many are planned (submitted or being replaced).
+
+    At most one job more than have arrived, so that at most one waits in the queue; never fewer
+    than planned while one waits, so that a waiting job keeps its place instead of being cancelled
+    and resubmitted; at least one once the sweep has had work (``busy``).
+    """
+    hold = max(min(wanted, arrived + 1), int(busy))
+    return max(hold, planned) if planned > arrived else hold
+
+
 class _Log:
     """Progress lines on stderr, and what the launcher needs to know of its jobs."""
 
@@ -301,17 +314,14 @@ def _slurm_classes(log: _Log):
                 log.task_done(finish == "memory", len(self.names))
 
     class OneJobWaiting(Adaptive):
-        """Adds jobs one at a time: at most one job waits in the queue and a waiting (or replacement)
-        job is not cancelled; once the sweep has work, one job is kept."""
+        """dask's adaptive scaling, its target passed through ``jobs_to_hold``."""
 
         busy = False
 
         async def target(self):
-            want = await super().target()
-            self.busy = self.busy or want > 0
-            arrived = len(self.observed)
-            target = max(min(want, arrived + 1), int(self.busy))
-            return max(target, len(self.plan)) if len(self.plan) > arrived else target
+            wanted = await super().target()
+            self.busy = self.busy or wanted > 0
+            return jobs_to_hold(wanted, len(self.observed), len(self.plan), self.busy)
 
     return LoggedJob, Progress, OneJobWaiting
 
@@ -365,8 +375,7 @@ def main(argv=None) -> int:
         print(f"slurm.py: {err}", file=sys.stderr)
         return 2
     # Ctrl-C and SIGTERM raise KeyboardInterrupt: the sweep then says how to resume, jobs are cancelled.
-    signal.signal(signal.SIGINT, log.interrupted)
-    signal.signal(signal.SIGTERM, log.interrupted)
+    handlers = {signum: signal.signal(signum, log.interrupted) for signum in (signal.SIGINT, signal.SIGTERM)}
 
     from dask_jobqueue import SLURMCluster
 
@@ -400,6 +409,8 @@ def main(argv=None) -> int:
             log.line(f"interrupted ({signal.Signals(log.signal).name}); finished tasks are kept, "
                      f"continue with --resume")
         log.line(f"jobs submitted: {len(log.submitted)}, tasks finished: {log.finished}, failed: {log.failed}")
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
     if log.sbatch_error:
         return 1
     return 128 + log.signal if log.signal else status
