@@ -137,6 +137,13 @@ def test_a_bad_spec_exits_2(tmp_path, capsys):
     assert err.startswith("slurm.py: ") and "seeds" in err and err.count("\n") == 1
 
 
+def test_slurm_is_not_started_without_root(monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)
+    assert slurm_local.unavailable_reason() == "starting SLURM's daemons needs root"
+    with pytest.raises(slurm_local.SlurmUnavailable, match="needs root"):
+        slurm_local.LocalSlurm().start()
+
+
 # On a real one-node SLURM.
 
 @pytest.fixture(scope="module")

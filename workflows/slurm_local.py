@@ -105,9 +105,8 @@ def install():
     """Install ``slurm-wlm`` and ``munge`` with apt when a command of theirs is missing."""
     if not _missing():
         return
-    reason = unavailable_reason()
-    if reason:
-        raise SlurmUnavailable(reason)
+    if unavailable_reason():
+        raise SlurmUnavailable(unavailable_reason())
     env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
     for command in (["apt-get", "update", "-q"],
                     ["apt-get", "install", "-y", "-q", "--no-install-recommends", *PACKAGES]):
@@ -154,6 +153,9 @@ class LocalSlurm:
 
     def start(self):
         """Install when needed, write the configuration, start the daemons, wait for an idle node."""
+        reason = unavailable_reason()
+        if reason:
+            raise SlurmUnavailable(reason)
         install()
         self.root = Path(self._given_root or tempfile.mkdtemp(prefix="dlasweep-slurm-")).resolve()
         try:
