@@ -152,6 +152,11 @@ def slurm():
     reason = slurm_local.unavailable_reason()
     if reason:
         pytest.skip(f"no one-node SLURM here: {reason}")
+    try:
+        slurm_local.install()
+    except slurm_local.SlurmUnavailable as err:
+        # A mirror outage must not block the rest of the suite; the reason is shown.
+        pytest.skip(f"no one-node SLURM here: {err}")
     with slurm_local.LocalSlurm() as cluster:
         yield cluster
 
