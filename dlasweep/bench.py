@@ -18,12 +18,12 @@ import numpy as np
 import xarray as xr
 
 MODELS = {
-    "lattice-2d": dict(model="lattice", dim=2),
-    "offlattice-2d": dict(model="offlattice", dim=2),
-    "lattice-3d": dict(model="lattice", dim=3),
-    "offlattice-3d": dict(model="offlattice", dim=3),
+    "lattice-2d": {"model": "lattice", "dim": 2},
+    "offlattice-2d": {"model": "offlattice", "dim": 2},
+    "lattice-3d": {"model": "lattice", "dim": 3},
+    "offlattice-3d": {"model": "offlattice", "dim": 3},
 }
-NAIVE = dict(jumps=False, kill_factor=2.0)
+NAIVE = {"jumps": False, "kill_factor": 2.0}
 COUNTS = {
     "lattice-2d": [10_000, 100_000, 1_000_000],
     "offlattice-2d": [10_000, 100_000, 1_000_000],
@@ -36,24 +36,34 @@ QUICK_COUNT = 2_000
 _PROBE = """
 import json, resource, sys, time
 import dlasweep as dla
-params = json.loads(sys.argv[1]); n = int(sys.argv[2])
+
+def peak_mb():
+    # the process's own high-water mark: ru_maxrss would also count the
+    # parent's, which a child inherits across fork and exec
+    try:
+        with open("/proc/self/status") as f:
+            return next(int(line.split()[1]) for line in f if line.startswith("VmHWM")) / 1024
+    except OSError:
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+params = json.loads(sys.argv[1]); n = int(sys.argv[2]); seed = int(sys.argv[3])
 dla.grow(50, seed=0, **params)  # load the compiled kernels
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-t = time.perf_counter(); c = dla.grow(n, seed=1, **params); dt = time.perf_counter() - t
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+base = peak_mb()
+t = time.perf_counter(); c = dla.grow(n, seed=seed, **params); dt = time.perf_counter() - t
+peak = peak_mb()
 print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.steps.sum()),
-                      peak_mb=peak / 1024, added_mb=(peak - base) / 1024)))
+                      peak_mb=peak, added_mb=peak - base)))
 """
 
 
-def probe(params: dict, n: int) -> dict:
-    """Grow one cluster of ``n`` with ``params`` in a fresh interpreter.
+def probe(params: dict, n: int, seed: int = 1) -> dict:
+    """Grow one cluster of ``n`` with ``params`` from ``seed`` in a fresh interpreter.
 
     Returns its seconds (compile excluded), status, steps and peak memory;
     e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures.
     """
     out = subprocess.run(
-        [sys.executable, "-c", _PROBE, json.dumps(params), str(n)],
+        [sys.executable, "-c", _PROBE, json.dumps(params), str(n), str(seed)],
         capture_output=True, text=True, check=True,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -119,17 +129,17 @@ def _to_dataset(rows) -> xr.Dataset:
         },
         coords={"model": column("model", str), "method": column("method", str), "n": column("n", np.int64)},
     )
-    units = dict(seconds="s", n_grown="1", walk_steps="1", peak_memory="MiB", added_memory="MiB", n="1")
-    names = dict(
-        seconds="wall time to grow the cluster, compilation excluded",
-        n_grown="particles attached",
-        walk_steps="walk steps and jumps in all",
-        peak_memory="peak resident memory of the process",
-        added_memory="peak resident memory added by growing the cluster",
-        n="target particle count",
-        model="model and dimension",
-        method="exact jumps or the naive single-step walk with a kill circle",
-    )
+    units = {"seconds": "s", "n_grown": "1", "walk_steps": "1", "peak_memory": "MiB", "added_memory": "MiB", "n": "1"}
+    names = {
+        "seconds": "wall time to grow the cluster, compilation excluded",
+        "n_grown": "particles attached",
+        "walk_steps": "walk steps and jumps in all",
+        "peak_memory": "peak resident memory of the process",
+        "added_memory": "peak resident memory added by growing the cluster",
+        "n": "target particle count",
+        "model": "model and dimension",
+        "method": "exact jumps or the naive single-step walk with a kill circle",
+    }
     for key in list(ds.data_vars) + ["n", "model", "method"]:
         ds[key].attrs["long_name"] = names[key]
         if key in units:
