@@ -28,8 +28,22 @@ COUNTS = {
     "lattice-2d": [10_000, 100_000, 1_000_000],
     "offlattice-2d": [10_000, 100_000, 1_000_000],
     "lattice-3d": [10_000, 100_000, 1_000_000],
-    "offlattice-3d": [10_000, 100_000],
+    "offlattice-3d": [10_000, 100_000, 1_000_000],
 }
+FULL_COUNT = 10_000_000
+"""``--full`` adds this N for every model."""
+HUGE_COUNT = 100_000_000
+"""``--huge`` adds this N for the 2D models (tens of minutes each)."""
+TARGETS = {
+    "offlattice-2d": {"seconds": {10**6: 10, 10**7: 130, 10**8: 1800}, "peak_mb": {10**7: 400, 10**8: 4000}},
+    "lattice-2d": {"seconds": {10**6: 6, 10**7: 90, 10**8: 1200}, "peak_mb": {10**7: 350, 10**8: 3000}},
+    "lattice-3d": {"seconds": {10**6: 12, 10**7: 200}, "peak_mb": {10**7: 1000}},
+    "offlattice-3d": {"seconds": {10**6: 25, 10**7: 400}, "peak_mb": {10**7: 1500}},
+}
+"""Issue 14's targets on one core: seconds to grow (compile excluded) and
+peak memory of the process (MiB) at each N."""
+EXPONENT_TARGET = (10**5, 10**7, 1.10)
+"""Cost exponent of the 2D models fitted from the first N to the second, and its target."""
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
 
@@ -69,13 +83,16 @@ def probe(params: dict, n: int, seed: int = 1) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset:
+def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=print) -> xr.Dataset:
     """Time every model at several N; return the measurements as a Dataset.
 
     Parameters
     ----------
     full : bool
-        Add N = 1e7 for the 2D models.
+        Add ``FULL_COUNT`` for every model and end with the targets table
+        (``target_table``).
+    huge : bool
+        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     quick : bool
         Only the smallest N of each model (a smoke test).
     echo : callable
@@ -84,7 +101,9 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
     rows = []
     plan = []
     for name, params in MODELS.items():
-        counts = [QUICK_COUNT] if quick else COUNTS[name] + ([10_000_000] if full and "2d" in name else [])
+        full = full or huge
+        counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
+        counts += [HUGE_COUNT] if huge and "2d" in name else []
         plan += [(name, "exact", params, n) for n in counts]
     naive_counts = [QUICK_COUNT // 4] if quick else NAIVE_COUNTS
     for n in naive_counts:
@@ -112,7 +131,53 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
         ratio = t["naive"] / t["exact"]
         ds.attrs[f"naive_over_exact_{n}"] = ratio
         echo(f"lattice-2d N={n}: naive walk takes {ratio:.1f}x the time of the exact-jump kernel")
+    if full:
+        for line in target_table(ds):
+            echo(line)
     return ds
+
+
+def _verdict(value, target):
+    """``value`` beside its target: met, or over by how much."""
+    if target is None:
+        return ""
+    if not np.isfinite(value):
+        return f" (target {target:g})"
+    return f" (<= {target:g}: met)" if value <= target else f" (<= {target:g}: {value / target - 1:.0%} over)"
+
+
+def target_table(ds: xr.Dataset) -> list[str]:
+    """Issue 14's table: seconds at 1e6, 1e7, 1e8, peak memory at 1e7 and 1e8,
+    and the 2D cost exponent, each beside its target (markdown rows)."""
+    counts = sorted({n for t in TARGETS.values() for n in t["seconds"]})
+    peaks = sorted({n for t in TARGETS.values() for n in t["peak_mb"]})
+    lo, hi, most = EXPONENT_TARGET
+    head = ["model", *(f"{n:.0e} s" for n in counts), *(f"peak MB at {n:.0e} (added)" for n in peaks),
+            f"cost exponent {lo:.0e} to {hi:.0e}"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, target in TARGETS.items():
+        exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
+        row = [name]
+
+        def at(n, exact=exact):
+            pick = exact.where(exact.n == n, drop=True)
+            return pick.isel(run=0) if pick.sizes["run"] else None
+
+        for n in counts:
+            r = at(n)
+            row.append("" if r is None else f"{float(r.seconds):.1f}{_verdict(float(r.seconds), target['seconds'].get(n))}")
+        for n in peaks:
+            r = at(n)
+            row.append("" if r is None else f"{float(r.peak_memory):.0f} ({float(r.added_memory):.0f})"
+                       f"{_verdict(float(r.peak_memory), target['peak_mb'].get(n))}")
+        fit = exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
+        if "2d" in name and fit.sizes["run"] >= 2 and int(fit.n.max()) == hi:
+            slope = np.polyfit(np.log(fit.n.values.astype(float)), np.log(fit.seconds.values), 1)[0]
+            row.append(f"{slope:.2f}{_verdict(slope, most)}")
+        else:
+            row.append("")
+        lines.append("| " + " | ".join(row) + " |")
+    return lines
 
 
 def _to_dataset(rows) -> xr.Dataset:
