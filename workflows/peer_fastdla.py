@@ -91,11 +91,11 @@ def run_ours(n: int, seed: int) -> dict:
     return {"seconds": r["seconds"], "peak_mb": r["peak_mb"], "added_mb": r["added_mb"]}
 
 
-def measure(binary: Path, counts, rounds: int, echo=print) -> list[dict]:
-    """Both codes at every count, ``rounds`` times, alternating which goes first."""
+def measure(binary: Path, plan, echo=print) -> list[dict]:
+    """Both codes at every (count, rounds) of ``plan``, alternating which goes first."""
     rows = []
     runners = {"dlasweep": run_ours, "fastDLA": lambda n, seed: run_fastdla(binary, n, seed)}
-    for n in counts:
+    for n, rounds in plan:
         for k in range(rounds):
             seed = k + 1
             order = list(runners) if k % 2 == 0 else list(runners)[::-1]
@@ -106,8 +106,8 @@ def measure(binary: Path, counts, rounds: int, echo=print) -> list[dict]:
     return rows
 
 
-def summary(rows, fastdla_version: str, command: str) -> str:
-    """Medians and ratios as a markdown table."""
+def summary(rows, fastdla_version: str, command: str, load: tuple) -> str:
+    """Medians and ratios as a markdown table; ``load``: the 1-minute load average before and after."""
     lines = [
         "# 2D off-lattice DLA: dlasweep against fastDLA",
         "",
@@ -116,7 +116,9 @@ def summary(rows, fastdla_version: str, command: str) -> str:
         (f"fastDLA {fastdla_version}, g++ -O3 -march=native; {platform.processor() or platform.machine()}, "
         f"{os.cpu_count()} cores, Python {platform.python_version()}. Each run a fresh single-threaded process; "
         "dlasweep's seconds exclude compilation and interpreter start, fastDLA's are its whole process. "
-        "Medians over the rounds (range in brackets); ratio > 1: dlasweep is faster or smaller."),
+        "Medians over the rounds (range in brackets); ratio > 1: dlasweep is faster or smaller. "
+         f"Load average (1 min) {load[0]:.1f} before, {load[1]:.1f} after: above 1 per core, other work shared "
+         "the machine and slowed both codes alike only on average."),
         "",
         ("| N | rounds | dlasweep s | fastDLA s | time fastDLA/dlasweep | dlasweep peak MB (added) | fastDLA peak MB "
         "| memory fastDLA/dlasweep |"),
@@ -132,7 +134,7 @@ def summary(rows, fastdla_version: str, command: str) -> str:
         time_ratio = [t["seconds"] / o["seconds"] for o, t in zip(ours, theirs)]
         mem_ratio = [t["peak_mb"] / o["peak_mb"] for o, t in zip(ours, theirs)]
         lines.append(
-            f"| {n:.0e} | {len(ours)} | {stat([r['seconds'] for r in ours], '{:.2f}')} "
+            f"| {n:,} | {len(ours)} | {stat([r['seconds'] for r in ours], '{:.2f}')} "
             f"| {stat([r['seconds'] for r in theirs], '{:.2f}')} | {stat(time_ratio, '{:.2f}')} "
             f"| {statistics.median(r['peak_mb'] for r in ours):.0f} "
             f"({statistics.median(r['added_mb'] for r in ours):.0f}) "
@@ -147,6 +149,7 @@ def main(argv=None) -> int:
     parser.add_argument("-o", "--output", type=Path, default=Path("results/bench"), help="output folder")
     parser.add_argument("--rounds", type=int, default=3, help="runs of each code at each N (default 3)")
     parser.add_argument("--large", action="store_true", help=f"add N = {LARGE:.0e} (minutes per run)")
+    parser.add_argument("--large-rounds", type=int, default=1, help=f"runs of each code at N = {LARGE:.0e} (default 1)")
     parser.add_argument("--counts", type=int, nargs="+", help=f"counts instead of {COUNTS} (and --large)")
     args = parser.parse_args(argv)
     missing = [name for name in SOURCES if not (args.fastdla / name).is_file()]
@@ -154,13 +157,14 @@ def main(argv=None) -> int:
         parser.error(f"--fastdla: {args.fastdla} holds no {', '.join(missing)}")
     if not os.access(TIME, os.X_OK):
         parser.error(f"needs {TIME} (GNU time) for fastDLA's peak memory")
-    if args.rounds < 1:
-        parser.error(f"--rounds: expected an integer >= 1, got {args.rounds}")
+    for key in ("rounds", "large_rounds"):
+        if getattr(args, key) < 1:
+            parser.error(f"--{key.replace('_', '-')}: expected an integer >= 1, got {getattr(args, key)}")
     if args.counts and min(args.counts) < 1:
         parser.error(f"--counts: expected integers >= 1, got {args.counts}")
     if args.output.exists() and not args.output.is_dir():
         parser.error(f"-o: {args.output} is a file, not a folder")
-    counts = (args.counts or COUNTS) + ([LARGE] if args.large else [])
+    plan = [(n, args.rounds) for n in args.counts or COUNTS] + ([(LARGE, args.large_rounds)] if args.large else [])
     os.environ.update(SINGLE_THREAD)  # both codes on one core each; the probes inherit it
     command = "python workflows/peer_fastdla.py " + " ".join(sys.argv[1:] if argv is None else argv)
     with tempfile.TemporaryDirectory() as scratch:
@@ -169,8 +173,9 @@ def main(argv=None) -> int:
         except subprocess.CalledProcessError as err:
             print(f"peer_fastdla.py: --fastdla: g++ failed: {err.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
             return 2
-        rows = measure(binary, counts, args.rounds)
-    table = summary(rows, version(args.fastdla), command)
+        load = os.getloadavg()[0]
+        rows = measure(binary, plan)
+    table = summary(rows, version(args.fastdla), command, (load, os.getloadavg()[0]))
     args.output.mkdir(parents=True, exist_ok=True)
     with open(args.output / "peer_fastdla.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
