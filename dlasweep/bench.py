@@ -146,14 +146,19 @@ def _verdict(value, target):
     return f" (<= {target:g}: met)" if value <= target else f" (<= {target:g}: {value / target - 1:.0%} over)"
 
 
+def _power(n: int) -> str:
+    """``1e7`` for 10**7."""
+    return f"1e{len(str(n)) - 1}"
+
+
 def target_table(ds: xr.Dataset) -> list[str]:
     """Issue 14's table: seconds at 1e6, 1e7, 1e8, peak memory at 1e7 and 1e8,
     and the 2D cost exponent, each beside its target (markdown rows)."""
     counts = sorted({n for t in TARGETS.values() for n in t["seconds"]})
     peaks = sorted({n for t in TARGETS.values() for n in t["peak_mb"]})
     lo, hi, most = EXPONENT_TARGET
-    head = ["model", *(f"{n:.0e} s" for n in counts), *(f"peak MB at {n:.0e} (added)" for n in peaks),
-            f"cost exponent {lo:.0e} to {hi:.0e}"]
+    head = ["model", *(f"{_power(n)} s" for n in counts), *(f"peak MB at {_power(n)} (added)" for n in peaks),
+            f"cost exponent {_power(lo)} to {_power(hi)}"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, target in TARGETS.items():
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
