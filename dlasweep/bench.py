@@ -18,54 +18,81 @@ import numpy as np
 import xarray as xr
 
 MODELS = {
-    "lattice-2d": dict(model="lattice", dim=2),
-    "offlattice-2d": dict(model="offlattice", dim=2),
-    "lattice-3d": dict(model="lattice", dim=3),
-    "offlattice-3d": dict(model="offlattice", dim=3),
+    "lattice-2d": {"model": "lattice", "dim": 2},
+    "offlattice-2d": {"model": "offlattice", "dim": 2},
+    "lattice-3d": {"model": "lattice", "dim": 3},
+    "offlattice-3d": {"model": "offlattice", "dim": 3},
 }
-NAIVE = dict(jumps=False, kill_factor=2.0)
+NAIVE = {"jumps": False, "kill_factor": 2.0}
 COUNTS = {
     "lattice-2d": [10_000, 100_000, 1_000_000],
     "offlattice-2d": [10_000, 100_000, 1_000_000],
     "lattice-3d": [10_000, 100_000, 1_000_000],
-    "offlattice-3d": [10_000, 100_000],
+    "offlattice-3d": [10_000, 100_000, 1_000_000],
 }
+FULL_COUNT = 10_000_000
+"""``--full`` adds this N for every model."""
+HUGE_COUNT = 100_000_000
+"""``--huge`` adds this N for the 2D models (tens of minutes each)."""
+TARGETS = {
+    "offlattice-2d": {"seconds": {10**6: 10, 10**7: 130, 10**8: 1800}, "peak_mb": {10**7: 400, 10**8: 4000}},
+    "lattice-2d": {"seconds": {10**6: 6, 10**7: 90, 10**8: 1200}, "peak_mb": {10**7: 350, 10**8: 3000}},
+    "lattice-3d": {"seconds": {10**6: 12, 10**7: 200}, "peak_mb": {10**7: 1000}},
+    "offlattice-3d": {"seconds": {10**6: 25, 10**7: 400}, "peak_mb": {10**7: 1500}},
+}
+"""Issue 14's targets on one core: seconds to grow (compile excluded) and
+peak memory of the process (MiB) at each N."""
+EXPONENT_TARGET = (10**5, 10**7, 1.10)
+"""Cost exponent of the 2D models fitted from the first N to the second, and its target."""
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
 
 _PROBE = """
 import json, resource, sys, time
 import dlasweep as dla
-params = json.loads(sys.argv[1]); n = int(sys.argv[2])
+
+def peak_mb():
+    # the process's own high-water mark: ru_maxrss would also count the
+    # parent's, which a child inherits across fork and exec
+    try:
+        with open("/proc/self/status") as f:
+            return next(int(line.split()[1]) for line in f if line.startswith("VmHWM")) / 1024
+    except OSError:
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+params = json.loads(sys.argv[1]); n = int(sys.argv[2]); seed = int(sys.argv[3])
 dla.grow(50, seed=0, **params)  # load the compiled kernels
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-t = time.perf_counter(); c = dla.grow(n, seed=1, **params); dt = time.perf_counter() - t
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+base = peak_mb()
+t = time.perf_counter(); c = dla.grow(n, seed=seed, **params); dt = time.perf_counter() - t
+peak = peak_mb()
 print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.steps.sum()),
-                      peak_mb=peak / 1024, added_mb=(peak - base) / 1024)))
+                      peak_mb=peak, added_mb=peak - base)))
 """
 
 
-def probe(params: dict, n: int) -> dict:
-    """Grow one cluster of ``n`` with ``params`` in a fresh interpreter.
+def probe(params: dict, n: int, seed: int = 1) -> dict:
+    """Grow one cluster of ``n`` with ``params`` from ``seed`` in a fresh interpreter.
 
     Returns its seconds (compile excluded), status, steps and peak memory;
     e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures.
     """
     out = subprocess.run(
-        [sys.executable, "-c", _PROBE, json.dumps(params), str(n)],
+        [sys.executable, "-c", _PROBE, json.dumps(params), str(n), str(seed)],
         capture_output=True, text=True, check=True,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset:
+def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=print) -> xr.Dataset:
     """Time every model at several N; return the measurements as a Dataset.
 
     Parameters
     ----------
     full : bool
-        Add N = 1e7 for the 2D models.
+        Add ``FULL_COUNT`` for every model and end with the targets table
+        (``target_table``).
+    huge : bool
+        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     quick : bool
         Only the smallest N of each model (a smoke test).
     echo : callable
@@ -74,7 +101,9 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
     rows = []
     plan = []
     for name, params in MODELS.items():
-        counts = [QUICK_COUNT] if quick else COUNTS[name] + ([10_000_000] if full and "2d" in name else [])
+        full = full or huge
+        counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
+        counts += [HUGE_COUNT] if huge and "2d" in name else []
         plan += [(name, "exact", params, n) for n in counts]
     naive_counts = [QUICK_COUNT // 4] if quick else NAIVE_COUNTS
     for n in naive_counts:
@@ -102,7 +131,58 @@ def run_bench(full: bool = False, quick: bool = False, echo=print) -> xr.Dataset
         ratio = t["naive"] / t["exact"]
         ds.attrs[f"naive_over_exact_{n}"] = ratio
         echo(f"lattice-2d N={n}: naive walk takes {ratio:.1f}x the time of the exact-jump kernel")
+    if full:
+        for line in target_table(ds):
+            echo(line)
     return ds
+
+
+def _verdict(value, target):
+    """``value`` beside its target: met, or over by how much."""
+    if target is None:
+        return ""
+    if not np.isfinite(value):
+        return f" (target {target:g})"
+    return f" (<= {target:g}: met)" if value <= target else f" (<= {target:g}: {value / target - 1:.0%} over)"
+
+
+def _power(n: int) -> str:
+    """``1e7`` for 10**7."""
+    return f"1e{len(str(n)) - 1}"
+
+
+def target_table(ds: xr.Dataset) -> list[str]:
+    """Issue 14's table: seconds at 1e6, 1e7, 1e8, peak memory at 1e7 and 1e8,
+    and the 2D cost exponent, each beside its target (markdown rows)."""
+    counts = sorted({n for t in TARGETS.values() for n in t["seconds"]})
+    peaks = sorted({n for t in TARGETS.values() for n in t["peak_mb"]})
+    lo, hi, most = EXPONENT_TARGET
+    head = ["model", *(f"{_power(n)} s" for n in counts), *(f"peak MB at {_power(n)} (added)" for n in peaks),
+            f"cost exponent {_power(lo)} to {_power(hi)}"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, target in TARGETS.items():
+        exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
+        row = [name]
+
+        def at(n, exact=exact):
+            pick = exact.where(exact.n == n, drop=True)
+            return pick.isel(run=0) if pick.sizes["run"] else None
+
+        for n in counts:
+            r = at(n)
+            row.append("" if r is None else f"{float(r.seconds):.1f}{_verdict(float(r.seconds), target['seconds'].get(n))}")
+        for n in peaks:
+            r = at(n)
+            row.append("" if r is None else f"{float(r.peak_memory):.0f} ({float(r.added_memory):.0f})"
+                       f"{_verdict(float(r.peak_memory), target['peak_mb'].get(n))}")
+        fit = exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
+        if "2d" in name and fit.sizes["run"] >= 2 and int(fit.n.max()) == hi:
+            slope = np.polyfit(np.log(fit.n.values.astype(float)), np.log(fit.seconds.values), 1)[0]
+            row.append(f"{slope:.2f}{_verdict(slope, most)}")
+        else:
+            row.append("")
+        lines.append("| " + " | ".join(row) + " |")
+    return lines
 
 
 def _to_dataset(rows) -> xr.Dataset:
@@ -119,17 +199,17 @@ def _to_dataset(rows) -> xr.Dataset:
         },
         coords={"model": column("model", str), "method": column("method", str), "n": column("n", np.int64)},
     )
-    units = dict(seconds="s", n_grown="1", walk_steps="1", peak_memory="MiB", added_memory="MiB", n="1")
-    names = dict(
-        seconds="wall time to grow the cluster, compilation excluded",
-        n_grown="particles attached",
-        walk_steps="walk steps and jumps in all",
-        peak_memory="peak resident memory of the process",
-        added_memory="peak resident memory added by growing the cluster",
-        n="target particle count",
-        model="model and dimension",
-        method="exact jumps or the naive single-step walk with a kill circle",
-    )
+    units = {"seconds": "s", "n_grown": "1", "walk_steps": "1", "peak_memory": "MiB", "added_memory": "MiB", "n": "1"}
+    names = {
+        "seconds": "wall time to grow the cluster, compilation excluded",
+        "n_grown": "particles attached",
+        "walk_steps": "walk steps and jumps in all",
+        "peak_memory": "peak resident memory of the process",
+        "added_memory": "peak resident memory added by growing the cluster",
+        "n": "target particle count",
+        "model": "model and dimension",
+        "method": "exact jumps or the naive single-step walk with a kill circle",
+    }
     for key in list(ds.data_vars) + ["n", "model", "method"]:
         ds[key].attrs["long_name"] = names[key]
         if key in units:

@@ -20,3 +20,21 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
     target.write_text("x")
     assert main(["bench", "--quick", "-o", str(target)]) == 2
     assert "-o" in capsys.readouterr().err
+
+
+def test_target_table_compares_each_figure_with_its_target():
+    from dlasweep.bench import _to_dataset, target_table
+
+    rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n, "steps": n,
+                 "status": "ok", "peak_mb": 200.0 + n / 1e5, "added_mb": n / 1e5}
+            for n in (10**5, 10**6, 10**7)]
+    rows.append({"model": "offlattice-3d", "method": "exact", "n": 10**6, "seconds": 20.0, "n_grown": 10**6, "steps": 1,
+                     "status": "ok", "peak_mb": 250.0, "added_mb": 50.0})
+    table = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in target_table(_to_dataset(rows))}
+    lattice = table["lattice-2d"]
+    assert lattice[1] == "31.7 (<= 6: 428% over)"
+    assert lattice[2] == "502.4 (<= 90: 458% over)"
+    assert lattice[4] == "300 (100) (<= 350: met)"
+    assert lattice[6].rstrip(" |") == "1.20 (<= 1.1: 9% over)"
+    assert table["offlattice-3d"][1] == "20.0 (<= 25: met)"
+    assert table["offlattice-3d"][6].rstrip(" |") == ""  # no exponent for 3D, nor without 1e7

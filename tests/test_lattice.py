@@ -5,7 +5,14 @@ import pytest
 from scipy.stats import chi2
 
 from dlasweep.kernels import maps
-from dlasweep.kernels.lattice import TABLE_MAX, _fine3, _moves, _symmetry, exit_law, exit_tables
+from dlasweep.kernels.lattice import (
+    TABLE_MAX,
+    _fine3,
+    _moves,
+    _symmetry,
+    exit_law,
+    exit_tables,
+)
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -48,7 +55,7 @@ def test_exit_law_matches_single_steps(dim, moore, r):
         x[idx] += moves[rng.integers(len(moves), size=len(idx))]
         alive[idx] = np.abs(x[idx]).max(1) < r
     sites, probs = exit_law(dim, moore, r)
-    key = lambda s: tuple(sorted(np.abs(s)))  # noqa: E731
+    key = lambda s: tuple(sorted(np.abs(s)))
     classes = sorted({key(s) for s in sites})
     expected = np.array([probs[[key(s) == c for s in sites]].sum() for c in classes]) * walks
     observed = np.array([sum(key(s) == c for s in x) for c in classes])
@@ -153,3 +160,11 @@ def test_field_fill_matches_field_mark(dim, width, cap):
             maps.field_mark(filled, dim, width, *p, 1)
         maps.field_fill(filled, dim, width, cap)
         assert (marked == filled).all()
+
+
+@pytest.mark.parametrize("n, value, dtype", [(5, 7, np.uint8), (3 << 20, -1, np.int32), (1 << 20, 2.5, np.float64)])
+def test_filled_is_np_full(n, value, dtype):
+    """``maps.filled`` (huge-page advice for large arrays) gives ``np.full``'s array, small or large."""
+    a = maps.filled(n, value, dtype)
+    assert a.dtype == dtype and a.shape == (n,)
+    assert np.array_equal(a, np.full(n, value, dtype))

@@ -73,8 +73,7 @@ import numpy as np
 
 from .._jit import clock, inline, jit
 from . import maps
-from .walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir, xo
-
+from .walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 
 POINT, BLOCK, LINE = 0, 1, 2
 OK, BOUNDARY, STEP_LIMIT, EXHAUSTED = 0, 1, 2, 3
@@ -183,7 +182,7 @@ def _insert(i, pts, nxt, dim, gi, gf, dirr, heads):
         tile = gi[14]
         gi[14] += 1
         if (tile + 1) * 64 > len(heads):
-            bigger = np.full(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
+            bigger = maps.filled(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
             bigger[: len(heads)] = heads
             heads = bigger
         dirr[t] = tile
@@ -226,7 +225,7 @@ def _allocate_maps(dim, width):
     """
     start, blocks, cells = maps.layout(dim, width)
     start -= start[min(1, len(cells) - 1)]
-    return np.zeros(start[-1], np.uint64), start, blocks, cells
+    return maps.filled(start[-1], 0, np.uint64), start, blocks, cells
 
 
 @jit
@@ -253,9 +252,9 @@ def _build_grid(dim, line, size, need, pts, count, nxt, tiles):
     gi, gf = _layout(dim, line, size, need)
     words, start, blocks, cells = _allocate_maps(dim, gi[9])
     ntiles = gi[3] * gi[4] * gi[5]
-    dirr = np.full(ntiles, -1, np.int32)
-    heads = np.full(64 * (tiles + tiles // 4 + 64), -1, np.int32)
-    field = np.full(((gi[9] + (1 << FS) - 1) >> FS) ** dim, gi[17], np.uint8)
+    dirr = maps.filled(ntiles, -1, np.int32)
+    heads = maps.filled(64 * (tiles + tiles // 4 + 64), -1, np.int32)
+    field = maps.filled(((gi[9] + (1 << FS) - 1) >> FS) ** dim, gi[17], np.uint8)
     for i in range(count):
         heads = _insert(i, pts, nxt, dim, gi, gf, dirr, heads)
         _mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
@@ -888,9 +887,9 @@ def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_
     times = np.full(nm, np.nan)
     nseed = 0 if line else (1 if shape == POINT else 1 << dim)
     cap = max(n, 1)
-    pts = np.zeros((cap, dim))
-    steps = np.zeros(cap, np.int64)
-    nxt = np.full(cap, -1, np.int32)
+    pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
+    steps = maps.filled(cap, 0, np.int64)
+    nxt = maps.filled(cap, -1, np.int32)
     count = min(n, nseed)
     geo = np.zeros(3)  # r_max, Chebyshev extent, h_max
     geo[2] = -1.0
