@@ -28,11 +28,12 @@ root_seed = 99
 """
 
 
-def synthetic_dataset(spec_text=SPEC, failed=()):
-    """Random results in the sweep's layout, without growing anything."""
+def synthetic_parts(spec_text=SPEC, failed=()):
+    """Random results in the sweep's layout, without growing anything: the dataset and its clusters apart."""
     rng = np.random.default_rng(0)
     spec = parse_spec(spec_text)
     scales = 2.0 ** np.arange(4)
+    history = np.array([5, 7, 9])
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     science = {
         "box_count": rng.integers(1, 9, (*grid, len(scales))),
@@ -40,12 +41,17 @@ def synthetic_dataset(spec_text=SPEC, failed=()):
         "status": rng.integers(0, 5, grid).astype(np.int8),
         "walk_steps": rng.integers(0, 1000, grid),
         **{k: rng.random(grid) for k in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
+        "radius_gyration_history": rng.random((*spec.shape, len(history))),
     }
-    sizes = rng.integers(0, 9, spec.n_tasks)
-    total = int(sizes.sum())
-    ragged = {"x": rng.normal(size=total), "y": rng.normal(size=total),
-              "diffusion_time": rng.integers(0, 50, total)}
-    return store.to_dataset(spec, scales, science, sizes, ragged, failed)
+    stored = [t for t in spec.tasks() if spec.stores(t)]
+    sizes = rng.integers(0, 9, len(stored))
+    clusters = [(rng.normal(size=(n, 2)), rng.integers(0, 50, n)) for n in sizes]
+    return store.to_dataset(spec, scales, history, science, sizes, failed), clusters
+
+
+def synthetic_dataset(spec_text=SPEC, failed=()):
+    """Random results in the sweep's layout, clusters in memory."""
+    return store.with_clusters(*synthetic_parts(spec_text, failed))
 
 
 @pytest.fixture
