@@ -102,8 +102,8 @@ _ATTRS = {
     "D_box_range_hi": "largest box side of that cluster's box-counting fit window",
     "box_slope": "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, largest N",
     "box_slope_std": "standard deviation over seeds of box_slope",
-    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over seeds",
-    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over seeds",
+    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over the stored clusters",
+    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over the stored clusters",
 }
 
 
