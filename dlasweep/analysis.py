@@ -48,6 +48,8 @@ COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
 """Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
+_MERGE_AT = 1_000_000
+"""Distinct (diffusion time, depth bin) pairs a configuration collects from its clusters before merging them."""
 
 _ATTRS = {
     "D": "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window",
@@ -371,9 +373,6 @@ def _merge(tables):
     keys, where = np.unique(np.concatenate([k for k, _ in tables]), return_inverse=True)
     return keys, np.bincount(where, weights=np.concatenate([c for _, c in tables])).astype(np.int64)
 
-
-_MERGE_AT = 1_000_000
-"""Distinct (time, depth) pairs a configuration collects before merging them."""
 
 
 def _config(sweep, config, out, resamples):

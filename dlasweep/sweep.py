@@ -14,8 +14,11 @@ clusters finished there and computes the rest; ``OUT.parts/manifest.json``
 records the spec's identity so that a changed spec is refused. A run holds
 an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
 same output is refused, and a killed run's lock is free at once. At the end
-the dataset is assembled from the parts in one pass, the clusters through
-flat files that are mapped, not loaded, so memory holds one part at a time.
+the dataset is assembled from the parts in one pass without the clusters'
+positions, which then go from the parts straight into the file
+(``store.save``), so memory holds one part at a time. Positions are kept
+only for the clusters ``[run] store_clusters`` stores (``Spec.stores``);
+every cluster's curves, its Rg along the growth included, are kept.
 This is the only module that knows dask.
 
 Precision on demand (``[run] target_ci``): the seeds of the spec are a first
@@ -361,19 +364,17 @@ class Parts:
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
 
-    def results(self, keys, names=None):
-        """The result of each key, in order; a part is read once for each run of its keys.
+    def results(self, keys, names):
+        """Variables ``names`` of the result of each key, in order; a part is read once for each run of its keys.
 
-        ``names``: the variables to read (default: all), e.g. only the
-        clusters' positions, or everything but them; ``<name>.shape``
-        gives a variable's shape without reading it.
+        Only those members are read: the clusters' positions, say, or
+        everything but them. ``<name>.shape`` gives a variable's shape
+        without reading it.
         """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
             with self._reading(file), np.load(file) as z:
                 part = [{} for _ in z["keys"]]
-                for name in z.files if names is None else names:
-                    if name in ("keys", "failed") or (names is None and name.endswith(".shape")):
-                        continue
+                for name in names:
                     if name.endswith(".shape"):
                         for result, shape in zip(part, z[name]):
                             result[name] = shape
