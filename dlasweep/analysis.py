@@ -48,6 +48,8 @@ COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
 """Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
+_MERGE_AT = 1_000_000
+"""Distinct (diffusion time, depth bin) pairs a configuration collects from its clusters before merging them."""
 
 _ATTRS = {
     "D": "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window",
@@ -102,8 +104,8 @@ _ATTRS = {
     "D_box_range_hi": "largest box side of that cluster's box-counting fit window",
     "box_slope": "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, largest N",
     "box_slope_std": "standard deviation over seeds of box_slope",
-    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over seeds",
-    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over seeds",
+    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over the stored clusters",
+    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over the stored clusters",
 }
 
 
@@ -236,11 +238,54 @@ class _Sweep:
         """Every float summary variable -> its dims beside the configuration's."""
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
+        # Files written before the growth history was recorded: the stored clusters give it.
+        self.growth = ds["history"].values if "radius_gyration_history" in ds else growth_counts(self.counts)
+
+    def curves(self, config):
+        """Rg of every seed's cluster at the ``growth`` counts, NaN where not grown (or, in older files, not stored)."""
+        if "radius_gyration_history" in self.ds:
+            return self.ds["radius_gyration_history"][dict(zip(self.config_dims, config))].values
+        curves = np.full((self.n_seeds, len(self.growth)), np.nan)
+        for s in range(self.n_seeds):
+            points = self.points(config, s)
+            if points is not None:
+                rg = radius_of_gyration(points)
+                reach = self.growth <= len(rg)
+                curves[s, reach] = rg[self.growth[reach] - 1]
+        return curves
+
+    @cached_property
+    def diffusion(self):
+        """Per configuration, the diffusion times of its stored clusters' particles by depth bin, as counts.
+
+        ``(times, depth bins, counts)`` of the distinct pairs, sorted by
+        time: exact histograms and medians without holding every particle.
+        The clusters are read once, in file order. The seed particle is
+        left out. Also returns the longest time stored.
+        """
+        bins = len(DEPTH_EDGES) - 1
+        pending, top = {}, 0
+        for (config, seed), i in sorted(self.clusters.items(), key=lambda item: item[1]):
+            points = self.points(config, seed)
+            if points is None:
+                continue
+            times = self.times(config, seed).astype(np.int64)
+            top = max(top, int(times.max()))
+            distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
+            slot = np.clip(np.digitize(distance[1:] / max(distance.max(), 1.0), DEPTH_EDGES) - 1, 0, bins - 1)
+            pending.setdefault(config, []).append(np.unique(times[1:] * bins + slot, return_counts=True))
+            if sum(len(keys) for keys, _ in pending[config]) > _MERGE_AT:
+                pending[config] = [_merge(pending[config])]
+        tables = {}
+        for config, found in pending.items():
+            keys, counts = _merge(found)
+            tables[config] = keys // bins, keys % bins, counts
+        return tables, top
 
     @cached_property
     def time_edges(self):
         """Edges of the diffusion-time histogram, from one step to the longest time stored."""
-        top = int(self.ds["diffusion_time"].max()) if self.ds.sizes.get("particle", 0) else 1
+        top = self.diffusion[1] if self.ds.sizes.get("particle", 0) else 1
         # Half-integer edges: times are whole steps, and log bins narrower than one step alias.
         return np.r_[0.5, np.unique(np.round(np.logspace(0, np.log10(max(top, 10)), 40))) + 0.5]
 
@@ -303,12 +348,31 @@ class _Sweep:
         })
 
 
+def growth_counts(counts) -> np.ndarray:
+    """Counts at which a sweep records each cluster's Rg along its growth (``radius_gyration_history``).
+
+    Everything the analysis reads of a growth history: the local-slope
+    curve (``LOCAL_PER_OCTAVE`` per octave up to the largest count) and
+    ``mass_radius_counts`` of each count, so that a fit on these equals one
+    on every prefix.
+    """
+    counts = np.asarray(counts, np.int64)
+    return np.unique(np.concatenate([_history_counts(int(counts[-1])), *map(mass_radius_counts, counts)]))
+
+
 def _history_counts(n_max):
     """Counts from ``HISTORY_START`` to ``n_max``, ``LOCAL_PER_OCTAVE`` per octave."""
     if n_max <= HISTORY_START:
         return np.array([n_max], np.int64)
     k = np.arange(int(LOCAL_PER_OCTAVE * np.log2(n_max / HISTORY_START)) + 1)
     return np.unique(np.r_[np.round(HISTORY_START * 2.0 ** (k / LOCAL_PER_OCTAVE)), n_max].astype(np.int64))
+
+
+def _merge(tables):
+    """One table of distinct keys and their summed counts from several."""
+    keys, where = np.unique(np.concatenate([k for k, _ in tables]), return_inverse=True)
+    return keys, np.bincount(where, weights=np.concatenate([c for _, c in tables])).astype(np.int64)
+
 
 
 def _config(sweep, config, out, resamples):
@@ -321,8 +385,10 @@ def _config(sweep, config, out, resamples):
     cell["anisotropy"] = (ds["anisotropy"][at].values if "anisotropy" in ds
                           else np.full_like(cell["max_radius"], np.nan))
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]
-    grid = np.unique(np.concatenate([sweep.history, *needed]))
-    curves = _per_cluster(sweep, config, cell, grid, out)
+    grid = sweep.growth
+    curves = sweep.curves(config)
+    _per_cluster(sweep, config, cell, curves, out)
+    _diffusion(sweep, config, out)
     for k, n in enumerate(sweep.counts):
         reached = cell["n_grown"][k] == n
         _count(sweep, config, k, n, reached, cell, curves[:, np.searchsorted(grid, needed[k])], needed[k], out,
@@ -336,38 +402,45 @@ def _config(sweep, config, out, resamples):
     _local(sweep, config, curves[alive][:, np.searchsorted(grid, sweep.history)], out, resamples)
 
 
-def _per_cluster(sweep, config, cell, grid, out):
-    """Each cluster's own fits at every count, its diffusion times by depth; returns its Rg at the ``grid`` counts."""
-    curves = np.full((sweep.n_seeds, len(grid)), np.nan)
-    times, depths = [], []
+def _per_cluster(sweep, config, cell, curves, out):
+    """Each cluster's own fits at every count, from its Rg along the growth (``curves``) and its box counts.
+
+    A cluster that stopped early, at m particles between the ``growth``
+    counts, is fitted on the counts below m and m itself.
+    """
+    grid = sweep.growth
     for s in range(sweep.n_seeds):
         out["cluster_index"][config][s] = sweep.clusters.get((config, s), -1)
-        points = sweep.points(config, s)
-        if points is not None:
-            rg = radius_of_gyration(points)
-            reach = grid <= len(rg)
-            curves[s, reach] = rg[grid[reach] - 1]
-            distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
-            depths.append(distance[1:] / max(distance.max(), 1.0))
-            times.append(sweep.times(config, s)[1:])
         for k in range(sweep.n_counts):
             m = int(cell["n_grown"][k, s])
             if m < 1:
                 continue
-            if points is not None:
-                fit = fit_mass_radius(rg[:m])
+            below = grid <= m
+            if np.isfinite(curves[s, below]).all():
+                n, rg = grid[below], curves[s, below]
+                if not len(n) or n[-1] != m:
+                    n, rg = np.r_[n, m], np.r_[rg, cell["radius_gyration"][k, s]]
+                fit = fit_mass_radius(rg, n)
                 out["D_cluster"][config][k, s], out["D_cluster_ok"][config][k, s] = fit.D, fit.ok
             fit = fit_dimension(sweep.scales, cell["box_count"][k, s])
             out["D_box_cluster"][config][k, s], out["D_box_cluster_ok"][config][k, s] = fit.D, fit.ok
             out["D_box_range_lo"][config][k, s], out["D_box_range_hi"][config][k, s] = fit.range_lo, fit.range_hi
-    times = np.concatenate(times).astype(float) if times else np.zeros(0)
-    if len(times):
-        depths = np.concatenate(depths)
-        out["diffusion_density"][config] = np.histogram(times, sweep.time_edges, density=True)[0]
-        slot = np.clip(np.digitize(depths, DEPTH_EDGES) - 1, 0, len(DEPTH_EDGES) - 2)
-        out["diffusion_median"][config] = [np.median(times[slot == b]) if (slot == b).any() else np.nan
-                                           for b in range(len(DEPTH_EDGES) - 1)]
-    return curves
+
+
+def _diffusion(sweep, config, out):
+    """Density of the diffusion times and their median by depth, pooled over the stored clusters."""
+    if config not in sweep.diffusion[0]:
+        return
+    times, slot, counts = sweep.diffusion[0][config]
+    n = np.histogram(times.astype(float), sweep.time_edges, weights=counts)[0]
+    # As np.histogram(..., density=True) computes it from the pooled times.
+    out["diffusion_density"][config] = n / np.diff(sweep.time_edges) / n.sum()
+    for b in range(len(DEPTH_EDGES) - 1):
+        here = slot == b
+        if here.any():
+            ends = np.cumsum(counts[here])
+            middle = times[here][np.searchsorted(ends, [(ends[-1] - 1) // 2, ends[-1] // 2], side="right")]
+            out["diffusion_median"][config][b] = middle.astype(float).mean()
 
 
 def _count(sweep, config, k, n, reached, cell, curves, counts, out, resamples):
@@ -427,10 +500,9 @@ def headline(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     out = {name: np.full(sweep.shape, np.nan) for name in ("D", "D_ci_lo", "D_ci_hi")}
     for config in np.ndindex(*sweep.shape):
         reached = ds["n_grown"][{**dict(zip(sweep.config_dims, config)), "n_particles": -1}].values == n
-        stored = (sweep.points(config, s) for s in np.flatnonzero(reached))
-        curves = [radius_of_gyration(points)[counts - 1] for points in stored if points is not None]
+        curves = sweep.curves(config)[reached][:, np.searchsorted(sweep.growth, counts)]
         fit, out["D_ci_lo"][config], out["D_ci_hi"][config] = _headline(
-            np.array(curves).reshape(len(curves), len(counts)), counts, _stream("D", n), resamples)
+            curves[np.isfinite(curves).all(axis=1)], counts, _stream("D", n), resamples)
         out["D"][config] = fit.D
     coords = {d: ds[d].values for d in sweep.config_dims}
     return xr.Dataset({name: (sweep.config_dims, values, {"long_name": _ATTRS[name]}) for name, values in out.items()},

@@ -197,7 +197,9 @@ def _sweep(args) -> int:
     if failed:
         _say(f"dlasweep sweep: {out} written, but tasks failed: {failed}")
         return 1
-    print(f"{out}: {ds.sizes['cluster']} clusters in {time.perf_counter() - start:.1f} s")
+    grown = ds["n_grown"].size // ds.sizes["n_particles"]
+    stored = "" if ds.sizes["cluster"] == grown else f" ({ds.sizes['cluster']} stored)"
+    print(f"{out}: {grown} clusters{stored} in {time.perf_counter() - start:.1f} s")
     return 0
 
 

@@ -130,6 +130,16 @@ def _cluster_points(ds, i):
     return cluster_points(ds, i)
 
 
+def _stored(ds) -> str:
+    """How many clusters keep their positions, and what the report draws from them."""
+    stored = ds.sizes.get("cluster", 0)
+    if stored == 0:
+        return "none stored with its positions (no gallery, no diffusion times; every curve is measured)"
+    if stored < ds["n_grown"].size // ds.sizes["n_particles"]:
+        return f"{stored} stored with their positions (the gallery and the diffusion times are of those)"
+    return "every one stored with its positions"
+
+
 def _plain(value):
     value = value.item() if hasattr(value, "item") else value
     return value.decode() if isinstance(value, bytes) else value
@@ -457,7 +467,7 @@ def _diffusion_times(sweep, path):
     fig.legend(*hist.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     depth.set_xlabel("distance from seed / cluster radius")
     depth.set_ylabel("median diffusion time")
-    fig.suptitle("Diffusion times, pooled over seeds")
+    fig.suptitle("Diffusion times, pooled over the stored clusters")
     _save(fig, path)
     return ("Distribution of diffusion times (left) and their median against the depth at which the particle "
             "stuck, as a fraction of the cluster's radius (right).")
@@ -643,9 +653,9 @@ def _write_report(sweep, figures, path) -> Path:
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
         "",
-        f"{ds.sizes.get('cluster', 0)} clusters; counts {', '.join(map(str, sweep.counts))}; "
-        f"{ds.sizes['seed']} seeds per configuration; root seed {ds.attrs.get('root_seed')}; "
-        f"{ds.attrs.get('source', 'dlasweep')}.",
+        f"{len(sweep.configs) * ds.sizes['seed']} clusters, {_stored(ds)}; counts "
+        f"{', '.join(map(str, sweep.counts))}; {ds.sizes['seed']} seeds per configuration; root seed "
+        f"{ds.attrs.get('root_seed')}; {ds.attrs.get('source', 'dlasweep')}.",
         "",
         f"Intervals: {attrs['interval']}.",
         "",

@@ -32,7 +32,7 @@ MAX_PARTICLES = 100_000_000
 _SECTIONS = ("grid", "model", "run")
 _TOP_KEYS = ("name",)
 _GRID_KEYS = ("size", "n_particles", "seeds")
-_RUN_KEYS = ("root_seed", "workers", "target_ci", "max_seeds")
+_RUN_KEYS = ("root_seed", "workers", "target_ci", "max_seeds", "store_clusters")
 
 DEFAULT_MAX_SEEDS = 256
 """Seed cap of a target sweep that names none (``[run] max_seeds``)."""
@@ -103,6 +103,10 @@ class Spec:
     max_seeds : int or None
         ``[run] max_seeds``: the most seeds a target sweep grows (None without
         ``target_ci``).
+    store_clusters : int or None
+        ``[run] store_clusters``: positions are stored for the first this
+        many seeds of each configuration (0: "none"); None ("all", the
+        default) stores every cluster. Curves are measured for all.
     """
 
     name: str
@@ -116,6 +120,7 @@ class Spec:
     text: str
     target_ci: float | None = None
     max_seeds: int | None = None
+    store_clusters: int | None = None
 
     @property
     def shape(self) -> tuple:
@@ -136,6 +141,10 @@ class Spec:
             for j, seed in enumerate(self.seeds):
                 yield Task(index + (j,), params, seed)
 
+    def stores(self, task: Task) -> bool:
+        """Whether the positions of ``task``'s cluster are stored (``[run] store_clusters``)."""
+        return self.store_clusters is None or task.index[-1] < self.store_clusters
+
     @property
     def n_tasks(self) -> int:
         return math.prod(self.shape)
@@ -152,8 +161,10 @@ class Spec:
 
         ``target_ci`` and ``max_seeds`` are left out: they decide how many
         replicates are grown, not what any replicate is, so finished tasks
-        stay valid when they change.
+        stay valid when they change. ``store_clusters`` is in when set: a
+        task whose cluster is not stored keeps no positions in its part.
         """
+        stored = {} if self.store_clusters is None else {"run.store_clusters": self.store_clusters}
         return {
             "grid.size": list(self.sizes),
             "grid.n_particles": list(self.counts),
@@ -162,6 +173,7 @@ class Spec:
             **{f"model.{k}": list(v) for k, v in self.axes.items()},
             "model (axis order)": list(self.axes),
             "run.root_seed": self.root_seed,
+            **stored,
             "dlasweep version": __version__,
         }
 
@@ -261,9 +273,10 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
     if workers is not None:
         workers = _integer("run.workers", workers, 1, None)
     target_ci, max_seeds = _precision(grid, run, len(seeds))
+    store_clusters = _store_clusters(run.get("store_clusters", "all"))
 
     spec = Spec(name.strip(), tuple(sizes), tuple(counts), tuple(seeds), fixed, axes,
-                root_seed, workers, text, target_ci, max_seeds)
+                root_seed, workers, text, target_ci, max_seeds, store_clusters)
     _check_grid(spec)
     return spec
 
@@ -285,6 +298,16 @@ def _precision(grid, run, first_batch):
     if max_seeds < first_batch:
         raise SpecError(f"run.max_seeds: {max_seeds} is below grid.seeds = {first_batch}, the first batch")
     return float(target_ci), max_seeds
+
+
+def _store_clusters(value):
+    """``[run] store_clusters``: "all" (None), "none" (0), or a count K >= 0 of seeds per configuration."""
+    if value in ("all", "none"):
+        return None if value == "all" else 0
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
+        raise SpecError(f'run.store_clusters: expected "all", "none" or an integer >= 0 '
+                        f"(the first K seeds of each configuration), got {value!r}")
+    return int(value)
 
 
 def _reject_unknown(prefix, table, known):

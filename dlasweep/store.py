@@ -39,6 +39,7 @@ import datetime
 import os
 from pathlib import Path
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -49,7 +50,8 @@ STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
 
 AXES = ("x", "y", "z")
-SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps")
+SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps",
+           "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
 _LENGTH = "lattice spacings (lattice) or particle diameters (offlattice)"
@@ -58,6 +60,8 @@ _DESCRIPTIONS = {
     "n_grown": ("particles attached at this count (less when growth stopped early)", "1"),
     "status": ("growth outcome at this count", "1"),
     "radius_gyration": (f"radius of gyration, in {_LENGTH}", "1"),
+    "radius_gyration_history": (f"radius of gyration of the first `history` particles, in {_LENGTH}", "1"),
+    "history": ("particle count at which the growth history is recorded", "1"),
     "max_radius": (f"largest distance of a particle from the seed particle, in {_LENGTH}", "1"),
     "anisotropy": ("cubic anisotropy of the outer half of the mass about the seed: <cos 4 theta> in 2D, "
                    "the cubic harmonic scaled alike in 3D (1: along the axes, 0: isotropic)", "1"),
@@ -81,22 +85,26 @@ class StoreError(ValueError):
     """A file that is not a readable dlasweep dataset; one line naming it."""
 
 
-def to_dataset(spec, scales, science, cluster_particles, ragged, failed=()) -> xr.Dataset:
-    """Assemble a sweep's results into the layout of README, "The dataset".
+def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
+    """Assemble a sweep's results into the layout of README, "The dataset", clusters aside.
+
+    The per-particle variables are added by ``with_clusters`` (in memory)
+    or streamed into the file by ``save``.
 
     Parameters
     ----------
     spec : dlasweep.spec.Spec
     scales : ndarray, (n_scales,)
+    history : ndarray of int, (n_history,)
+        Counts of the growth history (``analysis.growth_counts``).
     science : dict of ndarray
-        ``box_count`` on ``(<axes>..., size, n_particles, seed, scale)``, the
-        other quantities (``SCIENCE`` and ``wall_time``) without ``scale``.
-        ``status`` holds integer codes (index into ``STATUS_FLAGS``).
-    cluster_particles : ndarray, (n_tasks,)
-        Particles per cluster, in task (C) order.
-    ragged : dict of array_like
-        ``x``, ``y`` (``z``) and ``diffusion_time`` for every particle of
-        every cluster, clusters concatenated in task order (numpy or dask).
+        ``box_count`` on ``(<axes>..., size, n_particles, seed, scale)``,
+        ``radius_gyration_history`` on ``(<axes>..., size, seed, history)``,
+        the other quantities (``SCIENCE`` and ``wall_time``) on
+        ``(<axes>..., size, n_particles, seed)``. ``status`` holds integer
+        codes (index into ``STATUS_FLAGS``).
+    cluster_particles : ndarray, (n_stored,)
+        Particles per stored cluster (``spec.stores``), in task (C) order.
     failed : sequence of (str, str)
         Task keys and error messages of tasks that raised.
 
@@ -111,19 +119,20 @@ def to_dataset(spec, scales, science, cluster_particles, ragged, failed=()) -> x
         "n_particles": ("n_particles", np.asarray(spec.counts, np.int64)),
         "seed": ("seed", np.asarray(spec.seeds, np.int64)),
         "scale": ("scale", np.asarray(scales, np.float64)),
+        "history": ("history", np.asarray(history, np.int64)),
     }
     for name in _params.DEFAULTS:
         if name not in spec.axes and name != "size":
             coords[name] = ((), spec.resolved(name))
-    tasks = list(spec.tasks())
+    tasks = [t for t in spec.tasks() if spec.stores(t)]
     for name in (*spec.axes, "size"):
         coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks]))
     coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], np.int64))
 
     data = {name: ((*dims, "scale") if name == "box_count" else dims, science[name])
-            for name in (*SCIENCE, "wall_time")}
+            for name in (*SCIENCE, "wall_time") if name != "radius_gyration_history"}
+    data["radius_gyration_history"] = ((*dims[:-2], "seed", "history"), science["radius_gyration_history"])
     data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
-    data.update({name: ("particle", values) for name, values in ragged.items()})
     attrs = {
         "title": f"dlasweep parameter sweep '{spec.name}': diffusion-limited aggregation clusters",
         "history": f"{_now()} created by dlasweep {__version__} (run_sweep)",
@@ -192,16 +201,83 @@ def ragged_dtype(lattice: bool):
     return np.int32 if lattice else np.float64
 
 
-def save(ds: xr.Dataset, path) -> None:
-    """Write ``ds`` to netCDF-4 with zlib, atomically.
+def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
+    """``ds`` (from ``to_dataset``) with its stored clusters as per-particle variables in memory.
+
+    Parameters
+    ----------
+    clusters : iterable of (ndarray, ndarray)
+        Each stored cluster's points ``(n, dim)`` and diffusion times, in
+        ``cluster`` order.
+    """
+    columns = ragged_columns(ds)
+    total = int(ds["cluster_particles"].sum())
+    ragged = {name: np.empty(total, dtype) for name, dtype in columns.items()}
+    for start, block in _blocks(columns, _split(columns, clusters), PARTICLE_CHUNK):
+        for name, values in block.items():
+            ragged[name][start:start + len(values)] = values
+    return _describe(ds.assign({name: ("particle", values) for name, values in ragged.items()}))
+
+
+def ragged_columns(ds) -> dict:
+    """The per-particle variables of a dataset's clusters and their types: positions, then diffusion times.
+
+    Lattice positions are int32 sites, off-lattice ones float64; with
+    ``dim`` swept, 2D clusters lie in the z = 0 plane of 3D columns.
+    """
+    lattice = bool((ds["model"] == "lattice").all())
+    return {**{a: ragged_dtype(lattice) for a in AXES[:int(ds["dim"].max())]}, "diffusion_time": np.dtype(np.int64)}
+
+
+PARTICLE_CHUNK = 1 << 16
+"""Values per HDF5 chunk of a per-particle variable.
+
+Measured by ``workflows/ragged_encoding.py`` on 1000 lattice 2D clusters of
+10^5 (10^8 particles, 16 bytes each unpacked; a shared 2-core machine):
+write s / bytes per particle / open and read one cluster s, at zlib 1:
+2^14: 14.0 / 4.52 / 0.019; 2^16: 17.2 / 4.46 / 0.022; 2^18: 17.5 / 4.45 /
+0.037; 2^20: 18.4 / 4.44 / 0.053. Beyond 2^16 a file shrinks by under 0.5%
+while reading one cluster decompresses more that it does not need."""
+PARTICLE_ZLIB = 1
+"""zlib level of the per-particle variables (with shuffle).
+
+Same measurement, 2^16 values per chunk: level 0 (shuffle only) 1.9 s and
+16.0 bytes per particle; 1: 17.2 s, 4.46; 4: 38.8 s, 4.20; 9 (2^14): 339 s,
+3.80. Level 1 takes 3.6x off the file for about 10% of the time the sweep
+takes to grow the clusters; higher levels save 6-15% more at 2-20x the time."""
+
+
+def save(ds: xr.Dataset, path, clusters=None) -> None:
+    """Write ``ds`` to netCDF-4 with zlib, atomically, the per-particle variables streamed.
 
     The file is written under a temporary name in the target folder and
-    renamed, so the final name never holds a partial file.
+    renamed, so the final name never holds a partial file. The
+    per-particle variables go in ``PARTICLE_CHUNK`` values at a time, each
+    a whole compressed chunk, so they are never all in memory.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    path : path
+    clusters : iterable of (ndarray, ndarray), optional
+        For a sweep from ``to_dataset``: each stored cluster's points and
+        diffusion times, in ``cluster`` order, written as they come.
+        Default: ``ds``'s own per-particle variables, if any.
     """
     path = Path(path)
     tmp = path.with_name(f"{path.name}.tmp{os.getpid()}")
+    particle = [name for name, var in ds.variables.items() if var.dims == ("particle",)]
+    if clusters is not None:
+        columns, blocks = ragged_columns(ds), _split(ragged_columns(ds), clusters)
+    elif particle:
+        columns = {name: ds[name].dtype for name in particle}
+        blocks = ({name: ds[name][i:i + PARTICLE_CHUNK].values for name in particle}
+                  for i in range(0, ds.sizes["particle"], PARTICLE_CHUNK))
+    else:
+        columns, blocks = {}, ()
+    rest = ds.drop_vars(particle)
     encoding = {}
-    for name, var in ds.variables.items():
+    for name, var in rest.variables.items():
         compressible = var.ndim > 0 and var.dtype.kind in "biuf"
         enc = {"zlib": True, "complevel": 4, "shuffle": True} if compressible else {}
         if name in ds.coords or var.dtype.kind in "biu":
@@ -211,11 +287,64 @@ def save(ds: xr.Dataset, path) -> None:
             enc["dtype"] = "S1"  # a char array: see CF in the module docstring
         encoding[name] = enc
     try:
-        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        rest.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        if columns:
+            with netCDF4.Dataset(tmp, "a") as nc:
+                _write_ragged(nc, columns, blocks, int(ds["cluster_particles"].sum()))
         os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def _write_ragged(nc, columns, blocks, total):
+    """Define the per-particle variables in an open file and fill them, a whole chunk per write."""
+    nc.createDimension("particle", total)
+    chunk = min(PARTICLE_CHUNK, max(total, 1))
+    variables = {}
+    for name, dtype in columns.items():
+        # Never missing, so no fill value (as the counts).
+        var = nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB, shuffle=True,
+                                chunksizes=(chunk,), fill_value=False)
+        var.setncatts(_attributes(name, dtype))
+        variables[name] = var
+    written = 0
+    for start, block in _blocks(columns, blocks, chunk):
+        for name, values in block.items():
+            variables[name][start:start + len(values)] = values
+        written = start + len(next(iter(block.values())))
+    if written != total:
+        raise ValueError(f"clusters hold {written} particles, cluster_particles says {total}")
+
+
+def _split(columns, clusters):
+    """Column blocks of clusters given as (points, diffusion times); 2D points get z = 0 among 3D columns."""
+    axes = [name for name in columns if name in AXES]
+    for points, times in clusters:
+        block = {a: points[:, k] if k < points.shape[1] else np.zeros(len(points)) for k, a in enumerate(axes)}
+        block["diffusion_time"] = times
+        yield block
+
+
+def _blocks(columns, blocks, chunk):
+    """Regroup blocks of columns of any length into ``(start, block)`` of ``chunk`` values (the last shorter).
+
+    One buffer of ``chunk`` values per column: memory does not grow with the data.
+    """
+    buffer = {name: np.empty(chunk, dtype) for name, dtype in columns.items()}
+    filled = start = 0
+    for block in blocks:
+        n, done = len(next(iter(block.values()))), 0
+        while done < n:
+            take = min(chunk - filled, n - done)
+            for name, values in block.items():
+                buffer[name][filled:filled + take] = values[done:done + take]
+            filled, done = filled + take, done + take
+            if filled == chunk:
+                yield start, buffer
+                start, filled = start + chunk, 0
+    if filled:
+        yield start, {name: values[:filled] for name, values in buffer.items()}
 
 
 def open_sweep(path) -> xr.Dataset:
@@ -311,20 +440,25 @@ def _describe(ds: xr.Dataset) -> xr.Dataset:
     """Give every variable its long_name and units, flags their meanings, the file its globals."""
     ds["cluster_particles"] = ds["cluster_particles"].astype(np.int32)
     for name, var in ds.variables.items():
-        key = name if name in _DESCRIPTIONS else name.removeprefix("cluster_")
-        long_name, units = _DESCRIPTIONS[key]
-        if key != name:
-            long_name = f"the cluster's {key}: {long_name}"
-        var.attrs.update(long_name=long_name, **({"units": units} if units else {}))
-        if name == "status":
-            var.attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8),
-                             flag_meanings=" ".join(STATUS_FLAGS))
-        elif var.dtype == bool:
-            var.attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings="false true")
+        var.attrs.update(_attributes(name, var.dtype))
     ds["cluster_particles"].attrs["sample_dimension"] = "particle"
     ds.attrs = {"Conventions": "CF-1.8", "featureType": "point", "source": f"dlasweep {__version__}",
                 **ds.attrs}
     return ds
+
+
+def _attributes(name, dtype) -> dict:
+    """A variable's ``long_name`` and ``units`` (none for strings), and the meanings of its flags."""
+    key = name if name in _DESCRIPTIONS else name.removeprefix("cluster_")
+    long_name, units = _DESCRIPTIONS[key]
+    if key != name:
+        long_name = f"the cluster's {key}: {long_name}"
+    attrs = {"long_name": long_name, **({"units": units} if units else {})}
+    if name == "status":
+        attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
+    elif dtype == bool:
+        attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings="false true")
+    return attrs
 
 
 def _now() -> str:

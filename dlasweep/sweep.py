@@ -14,8 +14,11 @@ clusters finished there and computes the rest; ``OUT.parts/manifest.json``
 records the spec's identity so that a changed spec is refused. A run holds
 an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
 same output is refused, and a killed run's lock is free at once. At the end
-the dataset is assembled from the parts in one pass, the clusters through
-flat files that are mapped, not loaded, so memory holds one part at a time.
+the dataset is assembled from the parts in one pass without the clusters'
+positions, which then go from the parts straight into the file
+(``store.save``), so memory holds one part at a time. Positions are kept
+only for the clusters ``[run] store_clusters`` stores (``Spec.stores``);
+every cluster's curves, its Rg along the growth included, are kept.
 This is the only module that knows dask.
 
 Precision on demand (``[run] target_ci``): the seeds of the spec are a first
@@ -54,7 +57,7 @@ from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 
 from . import measure, store
-from .analysis import headline
+from .analysis import growth_counts, headline
 from .grow import grow
 from .kernels import lattice, offlattice
 from .params import STATUSES
@@ -137,21 +140,20 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                            desc=spec.name, disable=not progress, file=sys.stderr)
                 with bar:
                     _compute(dask_client, batch, todo, parts, bar)
-            # Clusters are gathered into flat files beside the parts, then written from there.
-            with tempfile.TemporaryDirectory(prefix=".ragged-", dir=parts.path) as scratch:
-                ds, failed = _assemble(batch, parts, Path(scratch))
-                if spec.target_ci is not None:
-                    half_width = _ci_half_width(ds)
-                    more, reason = _more_seeds(spec, len(batch.seeds), half_width.values, failed)
-                    if more:
-                        batch = spec.with_seeds(more)
-                        continue
-                    ds = store.record_stop(ds, half_width, spec.target_ci, spec.max_seeds, reason)
-                if out is None:
-                    ds = ds.copy(deep=True)
-                else:
-                    store.save(ds, out)
-                    ds = store.open_sweep(out)
+            ds, failed = _assemble(batch, parts)
+            if spec.target_ci is not None:
+                half_width = _ci_half_width(ds)
+                more, reason = _more_seeds(spec, len(batch.seeds), half_width.values, failed)
+                if more:
+                    batch = spec.with_seeds(more)
+                    continue
+                ds = store.record_stop(ds, half_width, spec.target_ci, spec.max_seeds, reason)
+            # The clusters go from the parts into the file (or memory) one part at a time.
+            if out is None:
+                ds = store.with_clusters(ds, _clusters(batch, parts))
+            else:
+                store.save(ds, out, _clusters(batch, parts))
+                ds = store.open_sweep(out)
             break
         parts.done = not failed
     if failed:
@@ -235,14 +237,19 @@ def _batch_size(spec, n_todo, threads) -> int:
     return max(1, min(int(TASK_SECONDS / per_cluster), n_todo // (4 * threads)))
 
 
-def measure_tasks(tasks, counts, scales, root_seed) -> list:
-    """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task."""
-    return [measure_task(task, counts, scales, root_seed) for task in tasks]
+def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
+    """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task.
+
+    ``stored``: per task, whether its positions are kept (``Spec.stores``).
+    """
+    return [measure_task(task, counts, scales, root_seed, keep) for task, keep in zip(tasks, stored)]
 
 
-def measure_task(task, counts, scales, root_seed) -> dict:
+def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
     """Grow one cluster and measure every count; runs on a worker.
 
+    Its Rg along the growth is kept at ``growth_counts(counts)``; its
+    positions and diffusion times only when ``stored`` (else empty).
     Never raises: a failure is returned as an ``error`` result with its message.
     """
     start = time.perf_counter()
@@ -256,31 +263,36 @@ def measure_task(task, counts, scales, root_seed) -> dict:
         lattice = cluster.params["model"] == "lattice"
         box = np.stack([measure.box_counts(points[:m], lattice=lattice, scales=scales)[1]
                         for m in prefix])
+        rg = measure.radius_of_gyration(points)
+        history = growth_counts(counts)
         return {
             "box_count": box,
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
-            "radius_gyration": measure.radius_of_gyration(points)[prefix - 1],
+            "radius_gyration": rg[prefix - 1],
+            "radius_gyration_history": np.where(history <= len(rg), rg[np.minimum(history, len(rg)) - 1], np.nan),
             "max_radius": measure.max_radius(points)[prefix - 1],
             "anisotropy": measure.anisotropy(points, prefix),
             "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
-            "points": points,
-            "diffusion_time": np.asarray(cluster.steps, np.int64),
+            "points": points if stored else points[:0],
+            "diffusion_time": np.asarray(cluster.steps if stored else cluster.steps[:0], np.int64),
             "error": np.array(""),
         }
     except Exception as err:
-        return error_result(len(counts), len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
+        return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
 
 
-def error_result(n_counts, n_scales, dim, message) -> dict:
+def error_result(counts, n_scales, dim, message) -> dict:
     """The result recorded for a task that raised (or whose worker kept dying)."""
+    n_counts = len(counts)
     nan = np.full(n_counts, np.nan)
     return {
         "box_count": np.zeros((n_counts, n_scales), np.int64),
         "n_grown": np.zeros(n_counts, np.int64),
         "status": np.full(n_counts, STATUSES.index("error"), np.int8),
         "radius_gyration": nan, "max_radius": nan, "anisotropy": nan, "wall_time": nan,
+        "radius_gyration_history": np.full(len(growth_counts(counts)), np.nan),
         "walk_steps": np.zeros(n_counts, np.int64),
         "points": np.zeros((0, dim)),
         "diffusion_time": np.zeros(0, np.int64),
@@ -352,13 +364,20 @@ class Parts:
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
 
-    def results(self, keys):
-        """The result of each key, in order; a part is read once for each run of its keys."""
+    def results(self, keys, names):
+        """Variables ``names`` of the result of each key, in order; a part is read once for each run of its keys.
+
+        Only those members are read: the clusters' positions, say, or
+        everything but them. ``<name>.shape`` gives a variable's shape
+        without reading it.
+        """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
             with self._reading(file), np.load(file) as z:
                 part = [{} for _ in z["keys"]]
-                for name in z.files:
-                    if name in ("keys", "failed") or name.endswith(".shape"):
+                for name in names:
+                    if name.endswith(".shape"):
+                        for result, shape in zip(part, z[name]):
+                            result[name] = shape
                         continue
                     flat, shapes = z[name], z[f"{name}.shape"]
                     ends = np.cumsum([math.prod(shape) for shape in shapes])
@@ -515,7 +534,7 @@ def _compute(client, spec, todo, parts, bar):
     batch_of = {}
 
     def submit(batch):
-        future = client.submit(measure_tasks, batch, counts, scales, spec.root_seed,
+        future = client.submit(measure_tasks, batch, counts, scales, spec.root_seed, list(map(spec.stores, batch)),
                                key=f"{batch[0].key}+{len(batch)}-{tag}", pure=False)
         batch_of[future.key] = batch
         return future
@@ -532,7 +551,7 @@ def _compute(client, spec, todo, parts, bar):
             # Dask gave up on it (its workers kept dying: KilledWorker) or it was cancelled.
             error = results[1] if future.status == "error" else None
             message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
-            results = [error_result(len(counts), len(scales), task.params["dim"], message) for task in batch]
+            results = [error_result(counts, len(scales), task.params["dim"], message) for task in batch]
         parts.write({task.key: result for task, result in zip(batch, results)})
         future.release()
         bar.update(len(batch))
@@ -540,9 +559,10 @@ def _compute(client, spec, todo, parts, bar):
             running.add(submit(batch))
 
 
-def _assemble(spec, parts, scratch: Path):
-    """The dataset from every part, in one pass; clusters go through flat files in ``scratch``."""
+def _assemble(spec, parts):
+    """The dataset from every part, in one pass, without the clusters' positions (``_clusters``)."""
     scales = sweep_scales(spec)
+    history = growth_counts(spec.counts)
     tasks = list(spec.tasks())
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     science = {
@@ -551,32 +571,29 @@ def _assemble(spec, parts, scratch: Path):
         "status": np.zeros(grid, np.int8),
         "walk_steps": np.zeros(grid, np.int64),
         **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
+        "radius_gyration_history": np.full((*spec.shape, len(history)), np.nan),
     }
-    lattice = all(t.params["model"] == "lattice" for t in tasks)
-    columns = {a: store.ragged_dtype(lattice) for a in store.AXES[: max(t.params["dim"] for t in tasks)]}
-    columns["diffusion_time"] = np.int64
     sizes, failed = [], []
-    with contextlib.ExitStack() as files:
-        sinks = {name: files.enter_context(open(scratch / name, "wb")) for name in columns}
-        for task, result in zip(tasks, parts.results(t.key for t in tasks)):
-            where = (*task.index[:-1], slice(None), task.index[-1])
-            for name in science:
-                science[name][where] = result[name]
-            points = result["points"]
-            for k, axis in enumerate(store.AXES[: len(columns) - 1]):
-                # With dim swept, 2D clusters get z = 0.
-                column = points[:, k] if k < points.shape[1] else np.zeros(len(points))
-                sinks[axis].write(column.astype(columns[axis]).tobytes())
-            sinks["diffusion_time"].write(result["diffusion_time"].astype(np.int64).tobytes())
-            sizes.append(len(points))
-            if str(result["error"]):
-                failed.append((task.key, str(result["error"])))
-    total = sum(sizes)
-    ragged = {name: np.memmap(scratch / name, dtype, mode="r", shape=(total,))
-              if total else np.zeros(0, dtype) for name, dtype in columns.items()}
+    for task, result in zip(tasks, parts.results((t.key for t in tasks), (*science, "points.shape", "error"))):
+        for name, values in science.items():
+            # Every count of the task's seed, or (the history) the task's own row.
+            where = task.index if name == "radius_gyration_history" else (*task.index[:-1], slice(None),
+                                                                            task.index[-1])
+            values[where] = result[name]
+        if spec.stores(task):
+            sizes.append(int(result["points.shape"][0]))
+        if str(result["error"]):
+            failed.append((task.key, str(result["error"])))
 
     # Keep scales up to the first at which every cluster fits in one box.
     fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)
     top = int(np.argmax(fits)) if fits.any() else len(scales) - 1
     science["box_count"] = science["box_count"][..., : top + 1]
-    return store.to_dataset(spec, scales[: top + 1], science, sizes, ragged, failed), failed
+    return store.to_dataset(spec, scales[: top + 1], history, science, sizes, failed), failed
+
+
+def _clusters(spec, parts):
+    """Points and diffusion times of each stored cluster, in order, read from the parts one part at a time."""
+    stored = (t.key for t in spec.tasks() if spec.stores(t))
+    for result in parts.results(stored, ("points", "diffusion_time")):
+        yield result["points"], result["diffusion_time"]

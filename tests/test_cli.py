@@ -42,6 +42,7 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["grow", "-n", "10", "--colour", "red", "-o", "a.nc"], "--colour"),
     (["sweep", "absent.toml"], "absent.toml"),
     (["sweep", "bad.toml"], "model.stickiness"),
+    (["sweep", "store.toml"], "run.store_clusters"),
     (["sweep", "spec.toml", "-o", "missing/out.nc"], "missing"),
     (["sweep", "spec.toml", "-o", "out.csv"], "out.csv"),
     (["sweep", "spec.toml", "-o", "/proc/out.nc"], "not writable"),
@@ -61,6 +62,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     monkeypatch.chdir(tmp_path)
     (tmp_path / "spec.toml").write_text(TINY_SPEC)
     (tmp_path / "bad.toml").write_text(BAD_SPEC)
+    (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345", 'root_seed = 1\nstore_clusters = "few"'))
     store.save(store.cluster_dataset(dla.grow(5, 0), seed=0), tmp_path / "one.nc")
     before = files_under(tmp_path)
     status, out, err = run_cli(*argv)

@@ -69,6 +69,11 @@ def test_every_workflow_spec_is_valid():
     (("root_seed = 12345", 'root_seed = "x"'), "run.root_seed"),
     (("root_seed = 12345", "root_seed = 1\nworkers = 0"), "run.workers"),
     (("root_seed = 12345", "root_seed = 1\nthreads = 2"), "run.threads"),
+    (("root_seed = 12345", 'root_seed = 1\nstore_clusters = "some"'), "run.store_clusters"),
+    (("root_seed = 12345", "root_seed = 1\nstore_clusters = -1"), "run.store_clusters"),
+    (("root_seed = 12345", "root_seed = 1\nstore_clusters = 2.5"), "run.store_clusters"),
+    (("root_seed = 12345", "root_seed = 1\nstore_clusters = true"), "run.store_clusters"),
+    (("root_seed = 12345", "root_seed = 1\nstore_clusters = [1]"), "run.store_clusters"),
     (("[run]", "[runs]"), "runs"),
     (('name = "tiny"', "name = 3"), "name"),
     (("seeds = 3", "seeds = "), "TOML"),
@@ -108,3 +113,14 @@ def test_digest_follows_the_science_not_the_comments():
     changed = parse_spec(TINY_SPEC.replace("seeds = 3", "seeds = 4"))
     assert changed.digest() != spec.digest()
     assert differences(spec.identity(), changed.identity()) == ["grid.seeds: [0, 1, 2] -> [0, 1, 2, 3]"]
+
+
+@pytest.mark.parametrize("value, stored", [('"all"', None), ('"none"', 0), ("0", 0), ("2", 2), ("5", 5)])
+def test_store_clusters_names_the_seeds_whose_positions_are_kept(value, stored):
+    spec = parse_spec(TINY_SPEC.replace("root_seed = 12345", f"root_seed = 12345\nstore_clusters = {value}"))
+    assert spec.store_clusters == stored
+    kept = [t.index[-1] for t in spec.tasks() if spec.stores(t)]
+    assert kept == [j for _ in range(4) for j in range(3) if stored is None or j < stored]
+    # Parts without positions serve no run that stores them: a set value is in the digest, "all" is not.
+    plain = parse_spec(TINY_SPEC)
+    assert (spec.digest() == plain.digest()) == (stored is None)

@@ -28,11 +28,12 @@ root_seed = 99
 """
 
 
-def synthetic_dataset(spec_text=SPEC, failed=()):
-    """Random results in the sweep's layout, without growing anything."""
+def synthetic_parts(spec_text=SPEC, failed=()):
+    """Random results in the sweep's layout, without growing anything: the dataset and its clusters apart."""
     rng = np.random.default_rng(0)
     spec = parse_spec(spec_text)
     scales = 2.0 ** np.arange(4)
+    history = np.array([5, 7, 9])
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     science = {
         "box_count": rng.integers(1, 9, (*grid, len(scales))),
@@ -40,12 +41,17 @@ def synthetic_dataset(spec_text=SPEC, failed=()):
         "status": rng.integers(0, 5, grid).astype(np.int8),
         "walk_steps": rng.integers(0, 1000, grid),
         **{k: rng.random(grid) for k in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
+        "radius_gyration_history": rng.random((*spec.shape, len(history))),
     }
-    sizes = rng.integers(0, 9, spec.n_tasks)
-    total = int(sizes.sum())
-    ragged = {"x": rng.normal(size=total), "y": rng.normal(size=total),
-              "diffusion_time": rng.integers(0, 50, total)}
-    return store.to_dataset(spec, scales, science, sizes, ragged, failed)
+    stored = [t for t in spec.tasks() if spec.stores(t)]
+    sizes = rng.integers(0, 9, len(stored))
+    clusters = [(rng.normal(size=(n, 2)), rng.integers(0, 50, n)) for n in sizes]
+    return store.to_dataset(spec, scales, history, science, sizes, failed), clusters
+
+
+def synthetic_dataset(spec_text=SPEC, failed=()):
+    """Random results in the sweep's layout, clusters in memory."""
+    return store.with_clusters(*synthetic_parts(spec_text, failed))
 
 
 @pytest.fixture
@@ -145,6 +151,10 @@ def test_cf_checker_finds_no_errors(saved, cf_tables, tmp_path):
     for name, params in {"lattice": {}, "offlattice-3d": {"model": "offlattice", "dim": 3, "size": 40}}.items():
         files.append(tmp_path / f"{name}.nc")
         store.save(store.cluster_dataset(dla.grow(30, 1, **params), seed=1), files[-1])
+    for value in ('"none"', "1"):
+        files.append(tmp_path / f"store-{value.strip(chr(34))}.nc")
+        ds, clusters = synthetic_parts(SPEC.replace("root_seed = 99", f"root_seed = 99\nstore_clusters = {value}"))
+        store.save(ds, files[-1], clusters)
     for path in files:
         assert cf_errors(path, cf_tables) == [], path.name
 
@@ -212,3 +222,45 @@ def test_bad_files_are_refused_clearly(tmp_path, saved):
         with pytest.raises(store.StoreError, match=reason) as caught:
             store.open_sweep(path)
         assert "\n" not in str(caught.value)
+
+
+def test_streamed_clusters_fill_whole_compressed_chunks(tmp_path, monkeypatch):
+    monkeypatch.setattr(store, "PARTICLE_CHUNK", 5)
+    ds, clusters = synthetic_parts()
+    whole = store.with_clusters(ds, clusters)
+    path = tmp_path / "streamed.nc"
+    store.save(ds, path, iter(clusters))
+    back = store.open_sweep(path)
+    xr.testing.assert_identical(back.drop_attrs(deep=False), whole.drop_attrs(deep=False))
+    back.close()
+    with netCDF4.Dataset(path) as nc:
+        for name in ("x", "y", "diffusion_time"):
+            assert nc[name].chunking() == [5] and nc[name].filters()["complevel"] == store.PARTICLE_ZLIB
+            assert "_FillValue" not in nc[name].ncattrs()
+    np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _ in clusters]))
+
+
+def test_blocks_are_whole_chunks_given_as_soon_as_full():
+    columns = {"x": np.dtype(np.int32), "diffusion_time": np.dtype(np.int64)}
+    taken = []
+
+    def clusters():
+        for n in (3, 9, 0, 4):
+            taken.append(n)
+            yield {"x": np.arange(n, dtype=np.int32) + 100 * len(taken), "diffusion_time": np.full(n, len(taken))}
+
+    starts, x = [], []
+    for start, block in store._blocks(columns, clusters(), 5):
+        starts.append(start)
+        x.append(block["x"].copy())
+        if start == 0:
+            assert taken == [3, 9]  # the first chunk leaves before the rest is read
+    assert starts == [0, 5, 10, 15] and [len(v) for v in x] == [5, 5, 5, 1]
+    np.testing.assert_array_equal(np.concatenate(x), np.r_[np.arange(3) + 100, np.arange(9) + 200, np.arange(4) + 400])
+
+
+def test_a_cluster_count_that_disagrees_writes_nothing(tmp_path):
+    ds, clusters = synthetic_parts()
+    with pytest.raises(ValueError, match="cluster_particles says"):
+        store.save(ds, tmp_path / "short.nc", [c for c in clusters if c is not max(clusters, key=lambda c: len(c[1]))])
+    assert list(tmp_path.iterdir()) == []
