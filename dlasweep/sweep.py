@@ -49,6 +49,7 @@ import uuid
 import warnings
 from pathlib import Path
 
+import dask
 import numpy as np
 from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
@@ -254,10 +255,8 @@ def measure_task(task, counts, scales, root_seed) -> dict:
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
         lattice = cluster.params["model"] == "lattice"
-        box = np.stack([measure.box_counts(points[:m], lattice=lattice, scales=scales)[1]
-                        for m in prefix])
         return {
-            "box_count": box,
+            "box_count": measure.prefix_box_counts(points, prefix, lattice=lattice, scales=scales)[1],
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
             "radius_gyration": measure.radius_of_gyration(points)[prefix - 1],
@@ -489,8 +488,11 @@ def _connected(client, scheduler_file, workers, n_tasks):
     # The kernels release the GIL, so one in-process worker with a thread per
     # core runs them in parallel, starts in milliseconds instead of a second
     # per spawned process, and loads the compiled kernels once, not per process.
-    with LocalCluster(n_workers=1, threads_per_worker=threads, processes=False,
-                      dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
+    # Its worker shares this process: no memory limit to watch (memory_limit=0),
+    # and no statistical profiler sampling the threads every 10 ms under the GIL.
+    with (dask.config.set({"distributed.worker.profile.enabled": False}),
+          LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
+                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster):
         with Client(cluster) as embedded:
             yield embedded
 
