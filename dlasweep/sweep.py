@@ -343,8 +343,12 @@ class Parts:
             # Empty arrays (a failed cluster's points) must not set the dtype of the others.
             members[name] = np.concatenate([v.ravel() for v in each if v.size] or [each[0].ravel()])
             members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)
-        with open(tmp, "wb") as f:
-            np.savez(f, keys=keys, failed=failed, **members)
+        try:
+            with open(tmp, "wb") as f:
+                np.savez(f, keys=keys, failed=failed, **members)
+        except BaseException:  # a full disk, a kill: no half-written part stays
+            tmp.unlink(missing_ok=True)
+            raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
 
