@@ -49,15 +49,12 @@ import uuid
 import warnings
 from pathlib import Path
 
-import dask
 import numpy as np
-from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 
 from . import measure, store
 from .analysis import headline
-from .grow import grow
-from .kernels import lattice, offlattice
+from .grow import compiled, grow
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
@@ -210,14 +207,8 @@ def _more_seeds(spec, n, half_width, failed):
 
 
 def _compiles(spec) -> bool:
-    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept.
-
-    Growth kernels take most of the compile time; the embedded cluster's
-    tasks use this process's cache, the only one looked at.
-    """
-    kernels = {"lattice": lattice._grow, "offlattice": offlattice._grow}
-    models = {task.params["model"] for task in spec.tasks()}
-    return not all(os.path.exists(kernels[m]._cache._cache_file._index_path) for m in models)
+    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept."""
+    return not all(compiled(m) for m in {task.params["model"] for task in spec.tasks()})
 
 
 def sweep_scales(spec: Spec) -> np.ndarray:
@@ -480,6 +471,10 @@ def _check_manifest(path, identity, resume):
 @contextlib.contextmanager
 def _connected(client, scheduler_file, workers, n_tasks):
     """A client: the one given, one for an address or scheduler file, or an embedded cluster."""
+    # distributed loads here, not with the module: ``dlasweep grow`` and ``info`` never need it
+    import dask
+    from distributed import Client, LocalCluster
+
     if isinstance(client, Client):
         yield client
         return
@@ -496,9 +491,9 @@ def _connected(client, scheduler_file, workers, n_tasks):
     # and no statistical profiler sampling the threads every 10 ms under the GIL.
     with (dask.config.set({"distributed.worker.profile.enabled": False}),
           LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
-                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster):
-        with Client(cluster) as embedded:
-            yield embedded
+                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
+          Client(cluster) as embedded):
+        yield embedded
 
 
 def _usable_cores() -> int:
@@ -510,6 +505,8 @@ def _usable_cores() -> int:
 
 def _compute(client, spec, todo, parts, bar):
     """Submit batches of tasks in a bounded window and save each batch as one part as it arrives."""
+    from distributed import as_completed
+
     counts = np.asarray(spec.counts, np.int64)
     scales = sweep_scales(spec)
     threads = max(1, sum(client.nthreads().values()))  # an adaptive cluster may start with none

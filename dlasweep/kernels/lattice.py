@@ -758,8 +758,11 @@ def _grow(
     return count, status
 
 
-def grow_lattice(n, p, marks, rng):
+def grow_lattice(n, p, marks, rng, times=None):
     """Grow a lattice cluster; see ``dlasweep.grow`` for the meaning.
+
+    ``times``, if given, is filled as the marks pass (NaN before), so that
+    another thread can watch the growth.
 
     Returns
     -------
@@ -772,7 +775,7 @@ def grow_lattice(n, p, marks, rng):
     moore = p["neighbours"] != 2 * dim
     points = np.zeros((n, dim), np.int32)
     steps = np.zeros(n, np.int64)
-    times = np.full(len(marks), np.nan)
+    times = np.full(len(marks), np.nan) if times is None else times
     count, status = _grow(
         n, dim, _moves(dim, moore), p["stickiness"],
         ("point", "block", "line").index(p["seed_shape"]), p["size"], p["launch"] == "box",
