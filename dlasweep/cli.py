@@ -188,6 +188,25 @@ def _growth_bar(n, model):
     return tqdm(total=n, unit=" particles", unit_scale=True, desc="grow", file=sys.stderr, delay=1.0, leave=False)
 
 
+def _steps_bar(desc):
+    """A progress bar of named steps on a terminal (shown after a second), else ``nullcontext(None)``."""
+    if not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    from tqdm import tqdm
+
+    return tqdm(desc=desc, unit="step", file=sys.stderr, delay=1.0, leave=False,
+                bar_format="{desc}: {n}/{total} [{elapsed}<{remaining}]{postfix}")
+
+
+def _follow(bar):
+    """``progress(done, steps, name)`` that moves ``bar`` to step ``done`` of ``steps``, named."""
+    def progress(done, steps, name):
+        bar.total = steps
+        bar.set_postfix_str(name, refresh=False)
+        bar.update(done - bar.n)
+    return progress
+
+
 def _sweep(args) -> int:
     spec = load_spec(args.spec)
     out = args.output or Path(args.spec.stem + ".nc")
@@ -225,7 +244,8 @@ def _report(args) -> int:
         ds.close()
         raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
     try:
-        report(ds, outdir)
+        with _steps_bar("report") as bar:
+            report(ds, outdir, progress=None if bar is None else _follow(bar))
     finally:
         ds.close()
     print(f"{outdir}: report written")

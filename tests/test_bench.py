@@ -20,3 +20,16 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
     target.write_text("x")
     assert main(["bench", "--quick", "-o", str(target)]) == 2
     assert "-o" in capsys.readouterr().err
+
+
+def test_sweep_ratios_set_the_whole_process_against_its_kernels():
+    from dlasweep.bench import RATIO_TARGET, sweep_ratios
+
+    lines = []
+    figures = sweep_ratios(echo=lines.append, sweeps=[(6, [50, 200])], threads=2)
+    get = {key.removeprefix("sweep_6x50_200_"): value for key, value in figures.items()}
+    assert set(get) == {"process", "kernels", "ideal", "ratio", "target"}
+    assert get["kernels"] > 0 and get["ideal"] == get["kernels"] / 2
+    assert get["process"] > get["ideal"] and get["ratio"] == get["process"] / get["ideal"]
+    assert get["target"] == RATIO_TARGET[0] * get["ideal"] + RATIO_TARGET[1]
+    assert len(lines) == 2 and lines[1].split()[:3] == ["6", "x", "[50,"]

@@ -176,6 +176,19 @@ def test_report_of_the_sweep(tiny_sweep, run_cli, tmp_path):
     assert any((tmp_path / "report").glob("*.png"))
 
 
+def test_report_shows_progress_on_a_terminal_only(tiny_sweep, run_cli, tmp_path, monkeypatch):
+    from dlasweep import cli
+
+    bars = []
+    real_bar = cli._steps_bar
+    monkeypatch.setattr(cli, "_steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
+    status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "piped")
+    assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "shown")
+    assert status == 0 and bars[-1].n == bars[-1].total > 10  # followed every step to the end
+
+
 def test_info_of_a_sweep(tiny_sweep, run_cli):
     path = tiny_sweep[3] / "tiny.nc"
     status, out, err = run_cli("info", path)
