@@ -231,37 +231,65 @@ root_seed = 1
 """
 """The sweep ``analysis_bench`` times, then reports: 64 lattice clusters of 1e4 particles."""
 SWEEP_THREADS = 2
-
-_SWEEP_PROBE = """
-import json, sys, time
-start = time.perf_counter()
-import dlasweep as dla
-from dlasweep.spec import parse_spec
-spec = parse_spec(sys.argv[1])
-t = time.perf_counter(); ds = dla.run_sweep(spec, out=sys.argv[2], workers=int(sys.argv[3]), progress=False)
-end = time.perf_counter()
-kernels = ds.wall_time.sel(n_particles=ds.n_particles.max())
-print(json.dumps(dict(sweep=end - t, script=end - start, kernels=float(kernels.sum()))))
-"""
+SWEEPS = [(1000, [100, 1000]), (64, [1000, 10_000]), (32, [10_000, 100_000]), (10_000, [1000])]
+"""Sweeps of 2D lattice clusters whose whole-process time ``sweep_ratios`` sets
+against their kernels' (issue 11): seeds and particle counts."""
+RATIO_TARGET = (1.25, 2.0)
+"""A sweep process should take at most 1.25 x ideal + 2 s (interpreter, imports, embedded cluster)."""
 
 
-def sweep_efficiency(out, threads: int = SWEEP_THREADS) -> dict:
-    """Run ``REPORT_SPEC`` as a user would, in a fresh interpreter, into ``out``.
+def sweep_spec(seeds: int, counts) -> str:
+    """A 2D lattice sweep of ``seeds`` clusters measured at ``counts``."""
+    return (f'name = "bench"\n[grid]\nn_particles = {list(counts)}\nseeds = {seeds}\n'
+            f'[model]\nmodel = "lattice"\ndim = 2\n[run]\nroot_seed = 1\n')
 
-    Returns the seconds inside ``run_sweep`` (embedded cluster start, every
-    task, writing the netCDF), of the whole process (interpreter and imports
-    too), and the kernels' own seconds summed over tasks; the ideal is the
-    kernels' sum divided by ``threads``.
+
+def sweep_efficiency(spec: str, out, threads: int = SWEEP_THREADS) -> dict:
+    """Run ``dlasweep sweep`` on the spec text as a user would, in a fresh process, into ``out``.
+
+    Returns the seconds of the whole process (interpreter, imports, the
+    embedded cluster, every task, writing the netCDF: ``process``), the
+    kernels' own seconds growing the clusters, summed (``kernels``), the
+    ideal (``kernels / threads``), ``ratio`` (process / ideal) and the
+    issue's ``target`` for the process (``RATIO_TARGET``).
     """
     import time
 
+    from .store import open_sweep
+
+    path = Path(out).with_suffix(".toml")
+    path.write_text(spec)
     start = time.perf_counter()
-    run = subprocess.run([sys.executable, "-c", _SWEEP_PROBE, REPORT_SPEC, str(out), str(threads)],
-                         capture_output=True, text=True, check=True)
-    result = json.loads(run.stdout.strip().splitlines()[-1])
-    result["process"] = time.perf_counter() - start
-    result["ideal"] = result["kernels"] / threads
-    return result
+    subprocess.run([sys.executable, "-m", "dlasweep", "sweep", str(path), "-o", str(out), "--workers", str(threads)],
+                   capture_output=True, text=True, check=True)
+    process = time.perf_counter() - start
+    with open_sweep(out) as ds:
+        kernels = float(ds["wall_time"].isel(n_particles=-1).sum())
+    ideal = kernels / threads
+    return {"process": process, "kernels": kernels, "ideal": ideal, "ratio": process / ideal,
+            "target": RATIO_TARGET[0] * ideal + RATIO_TARGET[1]}
+
+
+def sweep_ratios(echo=print, sweeps=SWEEPS, threads: int = SWEEP_THREADS) -> dict:
+    """``sweep_efficiency`` of each of ``sweeps`` ((seeds, counts) pairs), one line each.
+
+    Returns ``sweep_<seeds>x<counts>_<figure>`` -> value (e.g. ``sweep_1000x100_1000_ratio``)
+    for the figures of ``sweep_efficiency``.
+    """
+    import tempfile
+
+    figures = {}
+    echo(f"sweeps of 2D lattice clusters, whole process on {threads} threads, against ideal = kernels' sum / "
+         f"{threads} (target: process <= {RATIO_TARGET[0]} x ideal + {RATIO_TARGET[1]:g} s)")
+    with tempfile.TemporaryDirectory() as scratch:
+        for seeds, counts in sweeps:
+            name = f"{seeds}x{'_'.join(map(str, counts))}"
+            eff = sweep_efficiency(sweep_spec(seeds, counts), Path(scratch) / f"{name}.nc", threads)
+            figures.update({f"sweep_{name}_{key}": value for key, value in eff.items()})
+            echo(f"  {seeds:>5} x {counts!s:<16} process {eff['process']:6.2f} s, kernels {eff['kernels']:6.2f} s, ideal "
+                 f"{eff['ideal']:6.2f} s: ratio {eff['ratio']:4.2f}; target {eff['target']:6.2f} s "
+                 + ("met" if eff["process"] <= eff["target"] else f"over by {eff['process'] - eff['target']:.2f} s"))
+    return figures
 
 
 def _tiled_cluster(model: str, n: int = 100_000, tiles: int = 10) -> np.ndarray:
@@ -297,7 +325,7 @@ def analysis_bench(echo=print) -> dict:
     dict
         Wall seconds: ``box_<model>`` (``box_counts`` + ``fit_dimension``),
         ``rg_<model>`` (``radius_of_gyration`` + ``fit_mass_radius``) for
-        ``lattice`` and ``offlattice``, ``sweep_*`` from ``sweep_efficiency``,
+        ``lattice`` and ``offlattice``, ``sweep_*`` from ``sweep_ratios`` and ``sweep_efficiency``,
         and ``report``.
     """
     import tempfile
@@ -322,13 +350,12 @@ def analysis_bench(echo=print) -> dict:
         seconds[f"rg_{model}"] = time.perf_counter() - start
         echo(f"{model} 2D, {len(points)} points: box counting + fit {seconds[f'box_{model}']:.2f} s (D={fit.D:.3f}), "
              f"Rg of every prefix + fit {seconds[f'rg_{model}']:.2f} s")
+    seconds.update(sweep_ratios(echo))
     with tempfile.TemporaryDirectory() as scratch:
-        eff = sweep_efficiency(Path(scratch) / "sweep.nc")
+        eff = sweep_efficiency(REPORT_SPEC, Path(scratch) / "sweep.nc")
         seconds.update({f"sweep_{k}": v for k, v in eff.items()})
-        echo(f"sweep of 64 clusters of 1e4 on {SWEEP_THREADS} threads: {eff['sweep']:.2f} s in run_sweep "
-             f"({eff['process']:.2f} s for the whole process); kernels {eff['kernels']:.2f} s in all, "
-             f"ideal {eff['ideal']:.2f} s; ratio {eff['sweep'] / eff['ideal']:.2f} "
-             f"({eff['process'] / eff['ideal']:.2f} with the process)")
+        echo(f"sweep of 64 clusters of 1e4 on {SWEEP_THREADS} threads: {eff['process']:.2f} s for the whole "
+             f"process; kernels {eff['kernels']:.2f} s in all, ideal {eff['ideal']:.2f} s; ratio {eff['ratio']:.2f}")
         ds = open_sweep(Path(scratch) / "sweep.nc")
         start = time.perf_counter()
         report(ds, Path(scratch) / "report")

@@ -9,6 +9,7 @@ knows ``argv``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import tempfile
 import time
@@ -22,7 +23,7 @@ from . import __version__, store
 from . import params as _params
 from .analysis import summarise
 from .fit import fit_mass_radius
-from .grow import grow
+from .grow import compiled, grow
 from .measure import radius_of_gyration
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
 from .report import plot_bench, report
@@ -161,7 +162,9 @@ def _grow(args) -> int:
         name, _, reason = str(err).partition(":")  # the message starts with the argument's name
         raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
 
-    cluster = grow(args.n, args.seed, **given)
+    with _growth_bar(args.n, given.get("model", _params.DEFAULTS["model"])) as bar:
+        progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
+        cluster = grow(args.n, args.seed, progress=progress, **given)
     if cluster.status != "ok":
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
     if out.suffix.lower() == ".nc":
@@ -170,6 +173,40 @@ def _grow(args) -> int:
         draw_cluster(cluster.points, cluster.params, out, seed=args.seed, status=cluster.status, **picture)
     print(f"{out}: {cluster.n} particles")
     return 0
+
+
+def _growth_bar(n, model):
+    """A progress bar for ``grow`` on a terminal (particles, rate, time left), else ``nullcontext(None)``.
+
+    Announces first that the kernels compile when numba's cache lacks them.
+    The bar shows once growth has taken a second: small clusters print nothing more.
+    """
+    if not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    if not compiled(model):
+        _say("dlasweep grow: compiling kernels (once)")
+    from tqdm import tqdm
+
+    return tqdm(total=n, unit=" particles", unit_scale=True, desc="grow", file=sys.stderr, delay=1.0, leave=False)
+
+
+def _steps_bar(desc):
+    """A progress bar of named steps on a terminal (shown after a second), else ``nullcontext(None)``."""
+    if not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    from tqdm import tqdm
+
+    return tqdm(desc=desc, unit="step", file=sys.stderr, delay=1.0, leave=False,
+                bar_format="{desc}: {n}/{total} [{elapsed}<{remaining}]{postfix}")
+
+
+def _follow(bar):
+    """``progress(done, steps, name)`` that moves ``bar`` to step ``done`` of ``steps``, named."""
+    def progress(done, steps, name):
+        bar.total = steps
+        bar.set_postfix_str(name, refresh=False)
+        bar.update(done - bar.n)
+    return progress
 
 
 def _sweep(args) -> int:
@@ -211,7 +248,8 @@ def _report(args) -> int:
         ds.close()
         raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
     try:
-        report(ds, outdir)
+        with _steps_bar("report") as bar:
+            report(ds, outdir, progress=None if bar is None else _follow(bar))
     finally:
         ds.close()
     print(f"{outdir}: report written")

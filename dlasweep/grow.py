@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import os
+import threading
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import params as _params
-from .kernels.lattice import grow_lattice
-from .kernels.offlattice import grow_offlattice
+from .kernels import lattice, offlattice
+
+KERNELS = {"lattice": lattice.grow_lattice, "offlattice": offlattice.grow_offlattice}
+WATCH_MARKS = 200
+"""Counts at which a watched growth reports progress: every n / WATCH_MARKS particles."""
+WATCH_SECONDS = 0.2
+"""How often a watched growth calls its ``progress``."""
 
 
 @dataclass
@@ -53,7 +61,16 @@ def rng_for(seed) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(seed))
 
 
-def grow(n: int, seed=0, *, checkpoints=None, **params) -> Cluster:
+def compiled(model: str) -> bool:
+    """Whether numba's cache holds ``model``'s growth kernel (it takes most of the compile time).
+
+    Only this process's cache is looked at: the embedded cluster's too.
+    """
+    kernel = {"lattice": lattice._grow, "offlattice": offlattice._grow}[model]
+    return os.path.exists(kernel._cache._cache_file._index_path)
+
+
+def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:
     """Grow one DLA cluster of up to ``n`` particles.
 
     Parameters
@@ -65,6 +82,10 @@ def grow(n: int, seed=0, *, checkpoints=None, **params) -> Cluster:
         the cluster grown to ``n`` is a prefix of the one grown further.
     checkpoints : sequence of int, optional
         Counts at which to record elapsed time (default: ``[n]``).
+    progress : callable, optional
+        Called as ``progress(particles, seconds)`` every ``WATCH_SECONDS``
+        while the cluster grows (in another thread, which the compiled
+        kernel leaves free), and once at the end; the cluster is the same.
     **params
         Model parameters (see ``dlasweep.params.DEFAULTS``).
 
@@ -79,6 +100,40 @@ def grow(n: int, seed=0, *, checkpoints=None, **params) -> Cluster:
     marks = np.unique(np.asarray([n] if checkpoints is None else checkpoints, dtype=np.int64))
     if len(marks) and (marks[0] < 1 or marks[-1] > n):
         raise ValueError(f"checkpoints: every count must lie in [1, {n}]")
-    kernel = grow_lattice if p["model"] == "lattice" else grow_offlattice
-    points, steps, code, times = kernel(int(n), p, marks, rng)
+    kernel = KERNELS[p["model"]]
+    if progress is None:
+        points, steps, code, times = kernel(int(n), p, marks, rng)
+    else:
+        points, steps, code, times = _watched(kernel, int(n), p, marks, rng, progress)
     return Cluster(points, steps, _params.STATUSES[code], p, marks, times)
+
+
+def _watched(kernel, n, p, marks, rng, progress):
+    """``kernel(n, p, marks, rng)`` run in a thread, the counts it passes reported to ``progress``.
+
+    Growth does not depend on the marks (they only read a clock), so more
+    marks are passed, every n / ``WATCH_MARKS``, and the times it fills are
+    read as it goes.
+    """
+    watch = np.union1d(marks, np.linspace(0, n, WATCH_MARKS + 1)[1:].astype(np.int64)).astype(np.int64)
+    times = np.full(len(watch), np.nan)
+    result = []
+
+    def run():
+        try:
+            result.append(kernel(n, p, watch, rng, times))
+        except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
+            result.append(err)
+
+    start = time.perf_counter()
+    worker = threading.Thread(target=run, name="dlasweep-grow", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(WATCH_SECONDS)
+        passed = np.flatnonzero(~np.isnan(times))
+        progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
+    if isinstance(result[0], BaseException):
+        raise result[0]
+    points, steps, code, _ = result[0]
+    progress(len(points), time.perf_counter() - start)
+    return points, steps, code, times[np.isin(watch, marks)]

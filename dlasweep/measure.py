@@ -6,6 +6,7 @@ order; no I/O. Lengths are in lattice units (off-lattice: particle diameters).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -112,7 +113,7 @@ def _mark_sites(points, offsets, scale, cells, strips):
     for i in range(len(points)):
         row = 0
         for a in range(dim - 1):
-            row = row * cells[a] + points[i, a]
+            row = row * cells[a] + np.int64(points[i, a])  # integers only: no rounding
         for j in range(len(offsets)):
             last = np.int64(np.floor((points[i, dim - 1] - (-_HALF - offsets[j])) / scale))
             strips[j, row, last >> 6] |= np.uint64(1) << np.uint64(last & 63)
@@ -349,20 +350,72 @@ def _halve(fine, fine_shape, fine_offsets, side, offsets):
     Returns the count, the grids' stacked bitmaps and their shape, or None
     when those bitmaps would exceed the cap together.
     """
-    dim, half = len(fine_shape), side // 2
+    dim = len(fine_shape)
     shape = fine_shape // 2 + 1
     if _grids_within_cap(shape) < len(offsets) ** dim:
         return None
-    # The box of side 2s at offset o is the union of 2**dim boxes of the
-    # grid of side s at offset o % s, shifted by one where o >= s. Fine grids
-    # are numbered by their offset indices, axis 0 the most significant digit.
+    part, shift = _halving(fine_offsets, side // 2, offsets, dim)
+    stack = _empty_bitmaps(shape, len(offsets) ** dim, np.empty)
+    count = _coarsen(fine, _slab(fine_shape), part, shift, _slab((2,) * dim), stack, _slab(shape))
+    return count, stack, shape
+
+
+def _halving(fine_offsets, half, offsets, dim):
+    """``_coarsen``'s ``part`` and ``shift`` that make the grids of side 2 ``half`` from those of side ``half``.
+
+    The box of side 2s at offset o is the union of 2**dim boxes of the
+    grid of side s at offset o % s, shifted by one where o >= s. Fine grids
+    are numbered by their offset indices, axis 0 the most significant digit.
+    """
     part, shift = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
     for a in range(dim):
         part[3 - dim + a] = [fine_offsets.index(o % half) * len(fine_offsets) ** (dim - 1 - a) for o in offsets]
         shift[3 - dim + a] = [o >= half for o in offsets]
-    stack = _empty_bitmaps(shape, len(offsets) ** dim, np.empty)
-    count = _coarsen(fine, _slab(fine_shape), part, shift, _slab((2,) * dim), stack, _slab(shape))
-    return count, stack, shape
+    return part, shift
+
+
+def _families(sides: tuple, offsets: int):
+    """Which side each side is halved from, and every side's offsets.
+
+    Returns ``parent`` (side index -> index of the first side of half its
+    length, where there is one), ``children`` (its inverse, lists in order)
+    and ``grid_offsets`` (side index -> sorted offsets O(s), see ``box_counts``).
+    """
+    first = {}
+    for k, s in enumerate(sides):
+        first.setdefault(s, k)
+    parent = {k: first[s // 2] for k, s in enumerate(sides) if s % 2 == 0 and s // 2 in first}
+    children = {}
+    for k, m in parent.items():
+        children.setdefault(m, []).append(k)
+    grid_offsets = {}
+    for k in sorted(range(len(sides)), key=sides.__getitem__):
+        own = {t * sides[k] // offsets for t in range(offsets)}
+        grid_offsets[k] = sorted(own.union(grid_offsets[parent[k]] if k in parent else ()))
+    return parent, children, grid_offsets
+
+
+def _checked_points(points, offsets):
+    """``points`` as int64 (integers) or float64, checked for ``box_counts``."""
+    p = np.asarray(points)
+    if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) == 0:
+        raise ValueError(f"points: expected a non-empty (n, 2) or (n, 3) array, got shape {p.shape}")
+    p = p.astype(np.int64 if p.dtype.kind in "iub" else np.float64, copy=False)
+    if p.dtype.kind == "f" and not np.isfinite(p).all():
+        raise ValueError("points: every coordinate must be finite")
+    if offsets < 1:
+        raise ValueError(f"offsets: {offsets} is below 1")
+    return p
+
+
+def _checked_scales(scales, extent):
+    """``scales`` as float64, checked; ``default_scales(extent)`` when None."""
+    scales = default_scales(extent) if scales is None else np.asarray(scales, dtype=np.float64).ravel()
+    # Whole sides and integer offsets put every lattice cell in one box, and
+    # make a box of side 2s an exact union of boxes of side s.
+    if len(scales) == 0 or not (np.isfinite(scales) & (scales >= 1.0) & (scales == np.floor(scales))).all():
+        raise ValueError("scales: expected whole box sides >= 1 (the particle size)")
+    return scales
 
 
 def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
@@ -399,25 +452,14 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     scales : ndarray of float64
     counts : ndarray of int64
     """
-    p = np.asarray(points)
-    if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) == 0:
-        raise ValueError(f"points: expected a non-empty (n, 2) or (n, 3) array, got shape {p.shape}")
-    p = p.astype(np.int64 if p.dtype.kind in "iub" else np.float64, copy=False)
-    if p.dtype.kind == "f" and not np.isfinite(p).all():
-        raise ValueError("points: every coordinate must be finite")
-    if offsets < 1:
-        raise ValueError(f"offsets: {offsets} is below 1")
+    p = _checked_points(points, offsets)
     # Coordinates from the low corner, so the extreme particles sit exactly
     # (not within rounding) half a particle inside the first box. Column by
     # column: numpy reduces an (n, 2) array along axis 0 ten times slower.
     p = p - np.array([c.min() for c in p.T])
     high = np.array([c.max() for c in p.T])
     extent = float(high.max()) + 2 * _HALF
-    scales = default_scales(extent) if scales is None else np.asarray(scales, dtype=np.float64).ravel()
-    # Whole sides and integer offsets put every lattice cell in one box, and
-    # make a box of side 2s an exact union of boxes of side s.
-    if len(scales) == 0 or not (np.isfinite(scales) & (scales >= 1.0) & (scales == np.floor(scales))).all():
-        raise ValueError("scales: expected whole box sides >= 1 (the particle size)")
+    scales = _checked_scales(scales, extent)
     radius = 0.0 if lattice else _HALF
     if p.dtype.kind == "i" and extent < 2**31:
         p = p.astype(np.int32)  # half the memory traffic
@@ -426,17 +468,7 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     if high[0] <= max(len(p), 1 << 22):
         p = _first_axis_order(p, int(high[0]))
     sides = [int(s) for s in scales]
-    first = {}
-    for k, s in enumerate(sides):
-        first.setdefault(s, k)
-    parent = {k: first[s // 2] for k, s in enumerate(sides) if s % 2 == 0 and s // 2 in first}
-    children = {}
-    for k, m in parent.items():
-        children.setdefault(m, []).append(k)
-    grid_offsets = {}
-    for k in sorted(range(len(sides)), key=sides.__getitem__):
-        own = {t * sides[k] // offsets for t in range(offsets)}
-        grid_offsets[k] = sorted(own.union(grid_offsets[parent[k]] if k in parent else ()))
+    parent, children, grid_offsets = _families(tuple(sides), offsets)
     # One box of a side >= extent, placed at the low corner, holds the whole
     # set; a small cluster measured at a sweep's scales skips most of them.
     counts = np.ones(len(scales), np.int64)
@@ -451,6 +483,195 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
         counts[k], stack, shape = halved or _from_points(p, high, own, side, radius, keep=bool(kids))
         pending += [(c, None if stack is None else (stack, shape, own)) for c in kids]
     return scales, counts
+
+
+
+def prefix_box_counts(points, ends, lattice: bool = True, scales=None, offsets: int = 4):
+    """``box_counts(points[:m], lattice, scales, offsets)`` for every m in ``ends``, in one call.
+
+    The counts are those of ``box_counts``, bit for bit (the same rule and
+    kernels; a test holds the two together): the sweep measures every
+    particle count of a cluster with it. The work runs in compiled code that
+    releases the GIL, so threads measure clusters in parallel; a prefix with
+    a grid too large for a bitmap (a sparse set, not a cluster) is handed to
+    ``box_counts``.
+
+    Parameters
+    ----------
+    points : array_like, (n, dim)
+        Positions in attachment order.
+    ends : array_like of int
+        Prefix lengths, each in 1..n.
+    lattice, scales, offsets
+        As for ``box_counts``; the default scales reach the longest prefix's extent.
+
+    Returns
+    -------
+    scales : ndarray of float64
+    counts : ndarray of int64, (len(ends), len(scales))
+    """
+    p = _checked_points(points, offsets)
+    ends = np.asarray(ends, np.int64).ravel()
+    if not (ends.size and 1 <= ends.min() and ends.max() <= len(p)):
+        raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
+    p = p[: ends.max()]
+    low = np.array([c.min() for c in p.T])
+    extent = float(max(c.max() - c.min() for c in p.T)) + 2 * _HALF
+    if scales is None:
+        scales = default_scales(extent)
+    # A sweep measures every cluster at the same scales: checked and planned once.
+    scales, plan = _plan(np.asarray(scales, np.float64).ravel().tobytes(), offsets, p.shape[1])
+    counts = np.ones((len(ends), len(scales)), np.int64)
+    integer = p.dtype.kind == "i"
+    done = np.zeros(len(ends), bool)
+    if not integer or extent < 2**31:
+        if integer:  # from the low corner, exactly: each prefix is shifted again to its own
+            p = (p - low).astype(np.int32)
+        done = _prefix_counts(p, ends, integer, 0.0 if lattice else _HALF, *plan,
+                              _BITMAP_CAP, _STRIP_WORDS_PER_SITE, counts)
+    for c in np.flatnonzero(~done):
+        counts[c] = box_counts(p[: ends[c]], lattice, scales, offsets)[1]
+    return scales.copy(), counts
+
+
+@functools.lru_cache(maxsize=32)
+def _plan(scales: bytes, offsets: int, dim: int):
+    """The scales (float64 bytes) checked, and ``box_counts``'s families of their sides as arrays.
+
+    Returns the scales and, for ``_prefix_counts``: the sides; ``own`` and
+    ``n_own`` (row k holds the ``n_own[k]`` offsets of side k); ``order``,
+    the sides in the order ``box_counts`` visits them (depth first along
+    each family); ``parent`` (-1: none); and ``part``, ``shift``
+    (``_halving``'s, for side k from its parent).
+    """
+    scales = _checked_scales(np.frombuffer(scales), None)
+    sides = tuple(int(s) for s in scales)
+    parent, children, grid_offsets = _families(sides, offsets)
+    order, pending = [], [k for k in range(len(sides)) if k not in parent]
+    while pending:
+        order.append(pending.pop())
+        pending += children.get(order[-1], [])
+    width = max(map(len, grid_offsets.values()))
+    own = np.zeros((len(sides), width), np.int64)
+    part, shift = np.zeros((2, len(sides), 3, width), np.int64)
+    for k, offs in grid_offsets.items():
+        own[k, : len(offs)] = offs
+        if k in parent:
+            halving = _halving(grid_offsets[parent[k]], sides[k] // 2, offs, dim)
+            part[k, :, : len(offs)], shift[k, :, : len(offs)] = halving
+    n_own = np.array([len(grid_offsets[k]) for k in range(len(sides))], np.int64)
+    parents = np.array([parent.get(k, -1) for k in range(len(sides))], np.int64)
+    return scales, (np.array(sides, np.int64), own, n_own, np.array(order, np.int64), parents, part, shift)
+
+
+@jit
+def _words(shape):
+    """Words of one grid's bitmap, ``shape`` on three axes (``_bitmap_words``)."""
+    return shape[0] * shape[1] * ((shape[2] + 63) // 64)
+
+
+@jit
+def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words,
+                   counts):
+    """``counts[c]``: ``box_counts(points[:ends[c]])``'s counts, the routes chosen as it chooses them.
+
+    ``counts`` comes filled with ones (the sides a prefix fits in). Returns
+    whether each prefix was counted: not when a grid of it is too large for
+    a bitmap (``box_counts`` then sorts its boxes).
+    """
+    done = np.zeros(len(ends), np.bool_)
+    for c in range(len(ends)):
+        done[c] = _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift,
+                                cap, strip_words, counts[c])
+    return done
+
+
+@jit
+def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, out):
+    """``_prefix_counts`` for one prefix: ``box_counts``'s traversal and routes, step by step."""
+    n, dim = prefix.shape
+    low = prefix[0].copy()
+    for i in range(n):
+        for a in range(dim):
+            low[a] = min(low[a], prefix[i, a])
+    points = np.empty_like(prefix)
+    high = np.zeros(dim, prefix.dtype)
+    for i in range(n):
+        for a in range(dim):
+            points[i, a] = prefix[i, a] - low[a]
+            high[a] = max(high[a], points[i, a])
+    extent = float(high.max()) + 2 * _HALF
+    if high[0] <= max(n, 1 << 22):
+        points = _first_axis_order(points, np.int64(high[0]))
+    pad = 3 - dim
+    kids = np.zeros(len(sides), np.int64)  # of each side, those below the extent
+    for k in range(len(sides)):
+        if parent[k] >= 0 and sides[k] < extent:
+            kids[parent[k]] += 1
+    stacks = [np.empty((0, 0, 0), np.uint64) for _ in range(len(sides))]
+    shapes = np.ones((len(sides), 3), np.int64)
+    halves = (2 if dim == 3 else 1, 2, 2)
+    for k in order:
+        side = sides[k]
+        if side >= extent:
+            continue
+        offsets = own[k, : n_own[k]].copy()
+        grids = len(offsets) ** dim
+        m = parent[k]
+        count, stack, shape = -1, stacks[k], shapes[k]
+        if m >= 0 and len(stacks[m]) > 0:  # halved from the parent's grids (_halve)
+            fine = shapes[m]
+            shape = fine // 2 + 1
+            shape[:pad] = 1
+            if cap // (64 * _words(shape)) >= grids:
+                stack = np.empty((grids, shape[0] * shape[1], (shape[2] + 63) // 64), np.uint64)
+                count = _coarsen(stacks[m], (fine[0], fine[1], fine[2]), part[k, :, : len(offsets)].copy(),
+                                 shift[k, :, : len(offsets)].copy(), halves, stack, (shape[0], shape[1], shape[2]))
+        if count < 0:  # from the particles (_from_points)
+            shape = np.ones(3, np.int64)
+            for a in range(dim):
+                shape[pad + a] = np.int64(np.floor((high[a] + radius + _HALF + offsets[-1]) / side)) + 1
+            per_pass = cap // (64 * _words(shape))
+            cells = shape.copy()
+            for a in range(dim - 1):
+                cells[pad + a] = high[a] + 1
+            if (radius == 0.0 and integer and per_pass >= grids and cap // (64 * _words(cells)) >= len(offsets)
+                    and (side == 1 or _words(cells) < strip_words * n)):
+                strips = np.zeros((len(offsets), cells[0] * cells[1], (cells[2] + 63) // 64), np.uint64)
+                if dim == 2:
+                    _mark_sites(points, offsets, float(side), (cells[1],), strips)
+                else:
+                    _mark_sites(points, offsets, float(side), (cells[0], cells[1]), strips)
+                if side == 1:
+                    count, stack = _least_count(strips), strips
+                else:
+                    stack = np.empty((grids, shape[0] * shape[1], (shape[2] + 63) // 64), np.uint64)
+                    merge, moved = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
+                    merge[2] = np.arange(len(offsets))
+                    for a in range(pad, 2):
+                        moved[a] = offsets
+                    count = _coarsen(strips, (cells[0], cells[1], cells[2]), merge, moved,
+                                     (side if dim == 3 else 1, side, 1), stack, (shape[0], shape[1], shape[2]))
+            elif per_pass == 0:
+                return False
+            else:
+                for first in range(0, grids, per_pass):
+                    stack = np.zeros((min(per_pass, grids - first), shape[0] * shape[1], (shape[2] + 63) // 64),
+                                     np.uint64)
+                    _mark_boxes(points, offsets, float(side), radius, (shape[0], shape[1], shape[2]), first, stack,
+                                np.empty((0, 0), np.int64))
+                    least = _least_count(stack)
+                    count = least if count < 0 else min(count, least)
+                if per_pass < grids:
+                    stack = np.empty((0, 0, 0), np.uint64)
+        out[k] = count
+        if kids[k] > 0:
+            stacks[k], shapes[k] = stack, shape
+        if m >= 0:
+            kids[m] -= 1
+            if kids[m] == 0:
+                stacks[m] = np.empty((0, 0, 0), np.uint64)
+    return True
 
 
 @jit
@@ -495,7 +716,18 @@ def _seed_distances(points) -> np.ndarray:
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or len(p) == 0:
         raise ValueError(f"points: expected a non-empty (n, dim) array, got shape {p.shape}")
-    return np.sqrt(((p - p[0]) ** 2).sum(axis=1))
+    return _distances(np.ascontiguousarray(p))
+
+
+@jit
+def _distances(points):
+    out = np.empty(len(points))
+    for i in range(len(points)):
+        r2 = 0.0
+        for a in range(points.shape[1]):
+            r2 += (points[i, a] - points[0, a]) ** 2
+        out[i] = np.sqrt(r2)
+    return out
 
 
 def max_radius(points) -> np.ndarray:
@@ -535,16 +767,33 @@ def anisotropy(points, counts) -> np.ndarray:
     counts = np.asarray(counts, dtype=np.int64)
     if p.ndim != 2 or len(p) == 0 or counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
         raise ValueError("points, counts: expected a non-empty (n, dim) array and counts in 1..n")
-    offset = p - p[0]
-    r2 = (offset**2).sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quartic = (offset**4).sum(axis=1) / r2**2
-    isotropic = 3.0 / (p.shape[1] + 2)
-    out = np.full(counts.shape, np.nan)
-    for i, m in np.ndenumerate(counts):
-        outer = r2[1:m] >= np.median(r2[1:m]) if m > 1 else np.zeros(0, bool)
-        if outer.any():
-            out[i] = (quartic[1:m][outer].mean() - isotropic) / (1 - isotropic)
+    return _anisotropy(np.ascontiguousarray(p), counts.ravel()).reshape(counts.shape)
+
+
+@jit
+def _anisotropy(points, counts):
+    dim = points.shape[1]
+    top = counts.max() if len(counts) else 1
+    r2, quartic = np.zeros(top), np.zeros(top)
+    for i in range(1, top):
+        for a in range(dim):
+            u2 = (points[i, a] - points[0, a]) ** 2
+            r2[i] += u2
+            quartic[i] += u2 * u2
+        quartic[i] /= r2[i] ** 2
+    isotropic = 3.0 / (dim + 2)
+    out = np.full(len(counts), np.nan)
+    for c in range(len(counts)):
+        m = counts[c]
+        if m > 1:
+            median = np.median(r2[1:m])
+            total, outer = 0.0, 0
+            for i in range(1, m):
+                if r2[i] >= median:
+                    total += quartic[i]
+                    outer += 1
+            if outer:
+                out[c] = (total / outer - isotropic) / (1 - isotropic)
     return out
 
 

@@ -31,7 +31,7 @@ _MIN_WIDTH = 6.5
 """Inches: the narrowest figure, whatever its panels."""
 
 
-def report(ds, outdir) -> list:
+def report(ds, outdir, progress=None) -> list:
     """Write the report of a sweep into ``outdir``.
 
     Parameters
@@ -40,6 +40,9 @@ def report(ds, outdir) -> list:
         A sweep, as from ``run_sweep`` or ``open_sweep``.
     outdir : str or Path
         Created when missing.
+    progress : callable, optional
+        Called as ``progress(done, steps, name)`` as each step starts (the
+        summary, the tables, each plot, report.md) and once at the end.
 
     Returns
     -------
@@ -47,17 +50,30 @@ def report(ds, outdir) -> list:
         Every file written: ``summary.csv``, ``summary.md``, the plots that
         the dataset has data for, and ``report.md``.
     """
+    steps = ["summary", "tables", *_PLOTS, "report.md", ""]
+    done = iter(range(len(steps)))
+
+    def tell():
+        if progress:
+            k = next(done)
+            progress(k, len(steps) - 1, steps[k])
+
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
+    tell()
     sweep = _Sweep(ds)
+    tell()
     written = [_write_csv(sweep, out / "summary.csv"), _write_table(sweep, out / "summary.md")]
     figures = {}
     for name, draw in _PLOTS.items():
+        tell()
         caption = draw(sweep, out / f"{name}.png")
         if caption:
             figures[name] = caption
             written.append(out / f"{name}.png")
+    tell()
     written.append(_write_report(sweep, figures, out / "report.md"))
+    tell()
     return written
 
 

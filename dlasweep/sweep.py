@@ -53,13 +53,11 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 
 from . import measure, store
 from .analysis import growth_counts, headline
-from .grow import grow
-from .kernels import lattice, offlattice
+from .grow import compiled, grow
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
@@ -211,14 +209,8 @@ def _more_seeds(spec, n, half_width, failed):
 
 
 def _compiles(spec) -> bool:
-    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept.
-
-    Growth kernels take most of the compile time; the embedded cluster's
-    tasks use this process's cache, the only one looked at.
-    """
-    kernels = {"lattice": lattice._grow, "offlattice": offlattice._grow}
-    models = {task.params["model"] for task in spec.tasks()}
-    return not all(os.path.exists(kernels[m]._cache._cache_file._index_path) for m in models)
+    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept."""
+    return not all(compiled(m) for m in {task.params["model"] for task in spec.tasks()})
 
 
 def sweep_scales(spec: Spec) -> np.ndarray:
@@ -261,12 +253,10 @@ def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
         lattice = cluster.params["model"] == "lattice"
-        box = np.stack([measure.box_counts(points[:m], lattice=lattice, scales=scales)[1]
-                        for m in prefix])
         rg = measure.radius_of_gyration(points)
         history = growth_counts(counts)
         return {
-            "box_count": box,
+            "box_count": measure.prefix_box_counts(points, prefix, lattice=lattice, scales=scales)[1],
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
             "radius_gyration": rg[prefix - 1],
@@ -356,8 +346,12 @@ class Parts:
             # Empty arrays (a failed cluster's points) must not set the dtype of the others.
             members[name] = np.concatenate([v.ravel() for v in each if v.size] or [each[0].ravel()])
             members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)
-        with open(tmp, "wb") as f:
-            np.savez(f, keys=keys, failed=failed, **members)
+        try:
+            with open(tmp, "wb") as f:
+                np.savez(f, keys=keys, failed=failed, **members)
+        except BaseException:  # a full disk, a kill: no half-written part stays
+            tmp.unlink(missing_ok=True)
+            raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
 
@@ -496,6 +490,10 @@ def _check_manifest(path, identity, resume):
 @contextlib.contextmanager
 def _connected(client, scheduler_file, workers, n_tasks):
     """A client: the one given, one for an address or scheduler file, or an embedded cluster."""
+    # distributed loads here, not with the module: ``dlasweep grow`` and ``info`` never need it
+    import dask
+    from distributed import Client, LocalCluster
+
     if isinstance(client, Client):
         yield client
         return
@@ -508,10 +506,13 @@ def _connected(client, scheduler_file, workers, n_tasks):
     # The kernels release the GIL, so one in-process worker with a thread per
     # core runs them in parallel, starts in milliseconds instead of a second
     # per spawned process, and loads the compiled kernels once, not per process.
-    with LocalCluster(n_workers=1, threads_per_worker=threads, processes=False,
-                      dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
-        with Client(cluster) as embedded:
-            yield embedded
+    # Its worker shares this process: no memory limit to watch (memory_limit=0),
+    # and no statistical profiler sampling the threads every 10 ms under the GIL.
+    with (dask.config.set({"distributed.worker.profile.enabled": False}),
+          LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
+                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
+          Client(cluster) as embedded):
+        yield embedded
 
 
 def _usable_cores() -> int:
@@ -523,6 +524,8 @@ def _usable_cores() -> int:
 
 def _compute(client, spec, todo, parts, bar):
     """Submit batches of tasks in a bounded window and save each batch as one part as it arrives."""
+    from distributed import as_completed
+
     counts = np.asarray(spec.counts, np.int64)
     scales = sweep_scales(spec)
     threads = max(1, sum(client.nthreads().values()))  # an adaptive cluster may start with none

@@ -38,3 +38,16 @@ def test_target_table_compares_each_figure_with_its_target():
     assert lattice[6].rstrip(" |") == "1.20 (<= 1.1: 9% over)"
     assert table["offlattice-3d"][1] == "20.0 (<= 25: met)"
     assert table["offlattice-3d"][6].rstrip(" |") == ""  # no exponent for 3D, nor without 1e7
+
+
+def test_sweep_ratios_set_the_whole_process_against_its_kernels():
+    from dlasweep.bench import RATIO_TARGET, sweep_ratios
+
+    lines = []
+    figures = sweep_ratios(echo=lines.append, sweeps=[(6, [50, 200])], threads=2)
+    get = {key.removeprefix("sweep_6x50_200_"): value for key, value in figures.items()}
+    assert set(get) == {"process", "kernels", "ideal", "ratio", "target"}
+    assert get["kernels"] > 0 and get["ideal"] == get["kernels"] / 2
+    assert get["process"] > get["ideal"] and get["ratio"] == get["process"] / get["ideal"]
+    assert get["target"] == RATIO_TARGET[0] * get["ideal"] + RATIO_TARGET[1]
+    assert len(lines) == 2 and lines[1].split()[:3] == ["6", "x", "[50,"]

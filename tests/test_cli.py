@@ -5,6 +5,7 @@ import contextlib
 import io
 import shutil
 import subprocess
+import sys
 
 import dask
 import netCDF4
@@ -175,6 +176,19 @@ def test_report_of_the_sweep(tiny_sweep, run_cli, tmp_path):
     status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "report")
     assert status == 0, err
     assert any((tmp_path / "report").glob("*.png"))
+
+
+def test_report_shows_progress_on_a_terminal_only(tiny_sweep, run_cli, tmp_path, monkeypatch):
+    from dlasweep import cli
+
+    bars = []
+    real_bar = cli._steps_bar
+    monkeypatch.setattr(cli, "_steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
+    status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "piped")
+    assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "shown")
+    assert status == 0 and bars[-1].n == bars[-1].total > 10  # followed every step to the end
 
 
 def test_info_of_a_sweep(tiny_sweep, run_cli):
@@ -372,3 +386,20 @@ def test_generated_grow_arguments_run_or_exit_2(n, options, run_cli, tmp_path_fa
     assert status in (0, 2), f"{argv}\n{err}"
     event(f"exit {status}")
     assert (status == 0) == (folder / "c.nc").exists()
+
+
+def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
+    from dlasweep import cli
+
+    bars = []
+    real_bar = cli._growth_bar
+    monkeypatch.setattr(cli, "_growth_bar", lambda n, model: bars.append(real_bar(n, model)) or bars[-1])
+    status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
+    assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    monkeypatch.setattr(cli, "compiled", lambda model: model != "offlattice")
+    status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
+    assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
+    assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
+    with store.open_sweep(tmp_path / "shown.nc") as ds:
+        np.testing.assert_array_equal(store.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)

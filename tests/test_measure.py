@@ -429,3 +429,63 @@ def test_square_lattice_clusters_grow_along_the_axes_and_continuum_ones_do_not()
     # off-lattice scatters by ~0.2 about 0 (a handful of arms).
     assert lattice.mean - 3 * lattice.stderr > 0.1, lattice
     assert abs(continuum.mean) < 3 * continuum.stderr + 0.05, continuum
+
+
+def prefixes_one_by_one(points, ends, lattice, scales):
+    return np.stack([box_counts(points[:m], lattice=lattice, scales=scales)[1] for m in ends])
+
+
+def some_prefixes(n, rng):
+    """The whole set, its first point, and a few lengths between, unsorted, one repeated."""
+    ends = [n, 1, *rng.integers(1, n + 1, 5)]
+    return ends + ends[-1:]
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_every_prefix_counted_at_once_equals_box_counts_of_that_prefix(dim, lattice):
+    # DLA clusters of every model, random sets of integer sites and of points
+    # anywhere (wide and narrow, so both sparse and full grids), at the
+    # default scales of the whole set and at a sweep's longer axis.
+    rng = np.random.default_rng(dim + 2 * lattice)
+    sets = [dlasweep.grow(n, seed, dim=dim, model="lattice" if lattice else "offlattice").points
+            for n, seed in [(300, 0), (2000, 1), (2000, 2)]]
+    for seed in range(6):
+        n, width = int(rng.integers(2, 400)), int(rng.integers(2, 200 if dim == 2 else 40))
+        sets.append(random_set(dim, seed % 2 == 0, n, width, seed) - width // 2)
+    for points in sets:
+        ends = some_prefixes(len(points), rng)
+        for scales in (None, default_scales(len(points) + 2)):
+            got_scales, got = measure.prefix_box_counts(points, ends, lattice=lattice, scales=scales)
+            np.testing.assert_array_equal(got_scales, box_counts(points, scales=scales)[0] if scales is None
+                                          else scales)
+            np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, got_scales))
+
+
+@pytest.mark.parametrize("cap", [0, 1 << 10, 1 << 14])
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_every_prefix_at_once_takes_the_routes_box_counts_takes(monkeypatch, dim, lattice, cap):
+    # Small caps send sides to the particles, a few grids at a time, or (0)
+    # back to box_counts, which sorts their boxes; strips of sites are tried
+    # with and without their cost rule.
+    points = random_set(dim, True, 1500 if dim == 2 else 400, 100 if dim == 2 else 20, 5)
+    if not lattice:
+        points = points + np.random.default_rng(6).random(points.shape)
+    ends = some_prefixes(len(points), np.random.default_rng(7))
+    monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
+    for strips in (2, 0):
+        monkeypatch.setattr(measure, "_STRIP_WORDS_PER_SITE", strips)
+        scales, got = measure.prefix_box_counts(points, ends, lattice=lattice)
+        np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, scales))
+
+
+def test_prefix_box_counts_refuses_bad_input():
+    with pytest.raises(ValueError, match="ends"):
+        measure.prefix_box_counts(np.zeros((3, 2)), [0, 3])
+    with pytest.raises(ValueError, match="ends"):
+        measure.prefix_box_counts(np.zeros((3, 2)), [4])
+    with pytest.raises(ValueError, match="scales"):
+        measure.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
+    with pytest.raises(ValueError, match="points"):
+        measure.prefix_box_counts(np.zeros((3, 4)), [3])

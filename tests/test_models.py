@@ -1,5 +1,6 @@
 """One invariant suite over every model and variant of ``dla.grow``."""
 
+import importlib
 import itertools
 
 import numpy as np
@@ -224,3 +225,34 @@ def test_shortcuts_agree_where_they_should_and_depart_where_they_should():
     assert abs(mean_rg(kill_factor=3.0) / exact - 1) < 0.036
     assert mean_rg(kill_factor=1.2) / exact - 1 > 0.01
     assert mean_rg(step=2.0) / exact - 1 < -0.15
+
+
+@pytest.mark.parametrize("model", ["lattice", "offlattice"])
+def test_a_watched_growth_reports_its_particles_and_grows_the_same_cluster(model, monkeypatch):
+    growing = importlib.import_module("dlasweep.grow")  # the package attribute is the function
+
+    monkeypatch.setattr(growing, "WATCH_SECONDS", 1e-3)
+    seen = []
+    marks = [10, 3000, 30_000]
+    watched = dla.grow(30_000, 4, checkpoints=marks, model=model, progress=lambda k, s: seen.append((k, s)))
+    plain = dla.grow(30_000, 4, checkpoints=marks, model=model)
+    np.testing.assert_array_equal(watched.points, plain.points)
+    np.testing.assert_array_equal(watched.steps, plain.steps)
+    assert watched.status == plain.status and list(watched.checkpoints) == marks
+    assert np.all(np.diff(watched.times) >= 0) and not np.isnan(watched.times).any()
+    particles, seconds = np.array(seen).T
+    assert np.all(np.diff(particles) >= 0) and np.all(np.diff(seconds) >= 0) and particles[-1] == 30_000
+    # reported as it grows, at the watch marks (every n / WATCH_MARKS)
+    middle = particles[(particles > 0) & (particles < 30_000)]
+    assert len(middle) and np.all(middle % (30_000 // growing.WATCH_MARKS) == 0)
+
+
+def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
+    growing = importlib.import_module("dlasweep.grow")  # the package attribute is the function
+
+    def broken(n, p, marks, rng, times=None):
+        raise MemoryError("simulated")
+
+    monkeypatch.setitem(growing.KERNELS, "lattice", broken)
+    with pytest.raises(MemoryError, match="simulated"):
+        dla.grow(100, 0, progress=lambda k, s: None)

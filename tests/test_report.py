@@ -105,6 +105,16 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     assert text.count("95% confidence interval") == 1
 
 
+def test_report_tells_its_progress_step_by_step(tmp_path):
+    calls = []
+    report(synthetic_sweep({"stickiness": [1.0, 0.5]}), tmp_path / "out",
+           progress=lambda done, steps, name: calls.append((done, steps, name)))
+    plots = [name for _, _, name in calls[2:-2]]
+    assert [done for done, _, _ in calls] == list(range(len(calls))) and {steps for _, steps, _ in calls} == {len(calls) - 1}
+    assert [name for _, _, name in calls[:2]] == ["summary", "tables"] and calls[-2][2] == "report.md"
+    assert calls[-1][2] == "" and {f"{name}.png" for name in plots} >= ALWAYS - {"summary.csv", "summary.md", "report.md"}
+
+
 def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
     ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, sizes=(0, 40), counts=(200, 600), seeds=2)
     names = {p.name for p in report(ds, tmp_path)}

@@ -245,6 +245,25 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
     assert not Path(f"{out}.parts").exists()
 
 
+def test_a_part_cut_short_by_a_full_disk_leaves_no_temporary_file(tmp_path, dask_client, monkeypatch):
+    out = tmp_path / "tiny.nc"
+    real_savez = np.savez
+
+    def savez(file, **members):
+        if len(finished_clusters(out)) == 5:
+            file.write(b"PK half a part")
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_savez(file, **members)
+
+    monkeypatch.setattr(np, "savez", savez)
+    with pytest.raises(OSError, match="No space left"):
+        dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    parts = Path(f"{out}.parts")
+    assert len(finished_clusters(out)) == 5
+    assert sorted(p.name for p in parts.iterdir() if p.name not in (sweep.MANIFEST, sweep.LOCK)
+                  and not p.name.startswith("part-")) == []
+
+
 @contextlib.contextmanager
 def locked_by_another_process(folder):
     """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""

@@ -880,11 +880,10 @@ def _no_grid():
 
 
 @jit
-def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_steps, stick, marks, rng):
+def _grow(n, dim, shape, size, launch_box, lf, lm, kf, jumps, sigma, nwalk, max_steps, stick, marks, rng, times):
     t0 = clock()
     line = shape == LINE
     nm = len(marks)
-    times = np.full(nm, np.nan)
     nseed = 0 if line else (1 if shape == POINT else 1 << dim)
     cap = max(n, 1)
     pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
@@ -1063,8 +1062,11 @@ def _lockstep(n, dim, line, size, sigma, nwalk, max_steps, stick, marks, rng, rs
     return pts, steps, count, status, times
 
 
-def grow_offlattice(n, p, marks, rng):
+def grow_offlattice(n, p, marks, rng, times=None):
     """Grow an off-lattice cluster; see ``dlasweep.grow`` for the meaning.
+
+    ``times``, if given, is filled as the marks pass (NaN before), so that
+    another thread can watch the growth.
 
     Returns
     -------
@@ -1077,7 +1079,7 @@ def grow_offlattice(n, p, marks, rng):
         int(n), int(p["dim"]), ("point", "block", "line").index(p["seed_shape"]), int(p["size"]),
         p["launch"] == "box", float(p["launch_factor"]), float(p["launch_margin"]), float(p["kill_factor"]),
         bool(p["jumps"]), float(p["step"]), int(p["walkers"]), int(p["max_steps"]), float(p["stickiness"]),
-        np.asarray(marks, np.int64), rng,
+        np.asarray(marks, np.int64), rng, np.full(len(marks), np.nan) if times is None else times,
     )
     if count < len(pts):
         pts = pts[:count].copy()
