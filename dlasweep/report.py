@@ -483,6 +483,13 @@ def _diffusion_times(sweep, path):
     fig.legend(*hist.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     depth.set_xlabel("distance from seed / cluster radius")
     depth.set_ylabel("median diffusion time")
+    low, high = depth.get_ylim()
+    if high < 10 * low:
+        # within one decade matplotlib labels minor ticks as 2.8x10^1: plain numbers read better
+        from matplotlib.ticker import ScalarFormatter
+
+        depth.yaxis.set_major_formatter(ScalarFormatter())
+        depth.yaxis.set_minor_formatter(ScalarFormatter())
     fig.suptitle("Diffusion times, pooled over the stored clusters")
     _save(fig, path)
     return ("Distribution of diffusion times (left) and their median against the depth at which the particle "
