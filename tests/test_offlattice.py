@@ -295,7 +295,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     """The free-distance bound of the distance field and maps never exceeds
     the brute-force nearest centre distance, and the field holds the exact
     capped Chebyshev distance between coarse cells; random clustered sets."""
-    from dlasweep.kernels import offlattice as ol
+    from dlasweep.kernels.offlattice import cells as ol
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0
@@ -306,7 +306,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
         pts[:, :-1] %= size
         pts[:, -1] = np.abs(pts[:, -1])
     need = pts[:, -1].max() if line else np.abs(pts).max()
-    gi, gf, words, start, blocks, cells, dirr, heads, field = ol._build_grid(
+    gi, gf, words, start, blocks, cells, dirr, heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
     # the field against brute force (images included where the sides are periodic)
     W, fs, cap = gi[9], 1 << ol.FS, gi[17]
@@ -328,7 +328,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
         q[:, -1] = np.abs(q[:, -1])
     tree = cKDTree(np.concatenate([pts + e for e in images]))
     true = tree.query(q)[0]
-    bound = np.array([ol._map_dist(np.r_[x, np.zeros(3 - dim)], dim, size, gi, words, start, blocks, cells, field)
+    bound = np.array([ol.map_dist(np.r_[x, np.zeros(3 - dim)], dim, size, gi, words, start, blocks, cells, field)
                       for x in q])
     on = bound >= 0
     assert on.mean() > 0.9
