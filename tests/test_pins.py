@@ -14,6 +14,11 @@ import textwrap
 import numpy as np
 import pytest
 
+from dlasweep.kernels import maps
+from dlasweep.kernels.lattice import grow as lattice_grow
+from dlasweep.kernels.lattice.exits import unit_moves
+from dlasweep.kernels.lattice.words import rebuild
+from dlasweep.kernels.model import sticks_xo
 from dlasweep.kernels.offlattice import cells
 from dlasweep.kernels.offlattice import grow as offlattice_grow
 
@@ -84,3 +89,69 @@ def test_walk_bound_is_map_dist(dim, line):
             np.testing.assert_array_equal(moved, w)
         seen.add(np.sign(want))
     assert seen == {-1.0, 0.0, 1.0} if not line else seen >= {0.0, 1.0}
+
+
+def test_the_lattice_walks_single_step_is_touches_and_step_to_spelled_out():
+    assert copy(lattice_grow._single, "touches") == body(lattice_grow.touches)
+    assert copy(lattice_grow._single, "step_to") == body(lattice_grow.step_to)
+
+
+@pytest.mark.parametrize("dim, moore, line", [(2, False, False), (2, True, False), (3, False, False),
+                                              (3, True, False), (2, False, True), (3, False, True)])
+def test_touches_and_step_to_are_near_step(dim, moore, line):
+    """The single walker's step as ``_single`` spells it out (``touches``,
+    the sticking rule, ``step_to``: the stream in registers) sticks and
+    moves as ``_near_step`` does from the same sites and stream states, on
+    random clusters, where the walk takes it: near the cluster or the
+    substrate."""
+    rng = np.random.default_rng(5 + dim + 10 * moore + 100 * line)
+    size = 24 if line else 0
+    period = size if line else 0
+    width, off = (4 * size, size) if line else (128, 64)
+    hubs = rng.integers(0, size, (4, dim)) if line else rng.integers(-30, 31, (4, dim))
+    sites = hubs[rng.integers(0, 4, 400)] + np.rint(rng.normal(0, 4, (400, dim))).astype(np.int64)
+    if line:
+        sites[:, :-1] %= size
+        sites[:, -1] = np.abs(sites[:, -1]) % 20
+    sites = np.unique(sites, axis=0)
+    points = np.zeros((len(sites), dim), np.int32)
+    points[:] = sites
+    words, start, blocks, _, _ = rebuild(points, len(points), dim, width, off, period)
+    moves = unit_moves(dim, moore)
+    nm = len(moves)
+    occupied = {tuple(p) for p in sites}
+    stream = rng.integers(1, 2**63, 4, dtype=np.uint64)
+    outcomes = set()
+    tried = 0
+    while tried < 3000:
+        q = np.zeros(3, np.int64)
+        q[:dim] = sites[rng.integers(len(sites))] + rng.integers(-3, 4, dim)
+        if line:
+            q[:dim - 1] %= size
+            if q[dim - 1] < 0:
+                continue
+        if tuple(q[:dim]) in occupied:
+            continue
+        i, j, k = q + off
+        near = bool(maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1))
+        if not (near or (line and q[dim - 1] <= 1)):
+            continue
+        tried += 1
+        stickiness = (1.0, 0.4)[tried % 2]
+        want_q, want_rs = q.copy(), stream.copy()
+        want = lattice_grow._near_step(words, dim, start, blocks, width, off, want_q, moves, period, stickiness,
+                                       want_rs, near)
+        pos = q.astype(np.float64)
+        got_rs = tuple(stream)
+        got = lattice_grow.touches(words, dim, blocks[0], width, off, q, moves, nm, line, period)
+        if got:
+            got, *got_rs = sticks_xo(stickiness, *got_rs)
+            got_rs = np.array(got_rs, np.uint64)  # numba returns Python ints, which it would type by value
+        if not got:
+            got_rs = lattice_grow.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period, *got_rs)
+        assert got == want
+        np.testing.assert_array_equal(pos, want_q)
+        np.testing.assert_array_equal(np.array(got_rs, np.uint64), want_rs)
+        outcomes.add((bool(got), bool((pos != q).any())))
+        stream = want_rs
+    assert outcomes == {(True, False), (False, True), (False, False)}

@@ -23,7 +23,7 @@ from ..model import (
     POINT,
     STEP_LIMIT,
     checkpoint,
-    model,
+    model_from,
     sticks,
 )
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
@@ -54,13 +54,14 @@ GAUSS_JUMP = 4.0
 
 
 @jit
-def _walk(m, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt,
-          gi, gf, words, start, blocks, cells, dirr, heads, field, geo, rs, rng):
+def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi,
+          pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
 
     Parameters
     ----------
-    m : model.Model
+    model : Model
+        The model (``kernels.model.Model``).
     launch_r, kill_r : float
         Launch radius (height above a substrate) and kill radius now.
     total, pending : int
@@ -82,10 +83,10 @@ def _walk(m, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx
     path calls no array-taking helper that numba does not inline; see the
     package note.
     """
-    dim, size, step, stickiness = m.dim, m.size, m.step, m.stickiness
-    jumps, max_steps, ret, kill = m.jumps, m.max_steps, m.exact_return, m.kill
-    line = m.seed_shape == LINE
-    launch_box = m.launch_box
+    dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
+    jumps, max_steps, ret, kill = model.jumps, model.max_steps, model.exact_return, model.kill
+    line = model.seed_shape == LINE
+    launch_box = model.launch_box
     boxed = size > 0 and not line
     ceiling = line and launch_box
     hb = 0.5 * size
@@ -359,13 +360,14 @@ def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
 
 
 @jit
-def _grow(n, m, marks, rng, times):
+def _grow(n, model, marks, rng, times):
     """Grow an off-lattice cluster of up to ``n`` particles.
 
     Parameters
     ----------
     n : int
-    m : model.Model
+    model : Model
+        The model (``kernels.model.Model``).
     marks : int64 (K,)
         Particle counts at which to read the clock, ascending.
     rng : numpy.random.Generator
@@ -380,7 +382,7 @@ def _grow(n, m, marks, rng, times):
     status : int, a code of ``dlasweep.params.STATUSES``
     """
     t0 = clock()
-    dim, seed_shape, size = m.dim, m.seed_shape, m.size
+    dim, seed_shape, size = model.dim, model.seed_shape, model.size
     line = seed_shape == LINE
     nseed = 0 if line else (1 if seed_shape == POINT else 1 << dim)
     cap = max(n, 1)
@@ -401,8 +403,8 @@ def _grow(n, m, marks, rng, times):
     grid = build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
-    if m.walkers > 1:
-        count, status = _lockstep(n, m, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid)
+    if model.walkers > 1:
+        count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid)
         return pts, steps, count, status
     w = np.zeros(3)
     u = np.zeros(3)
@@ -423,8 +425,8 @@ def _grow(n, m, marks, rng, times):
     pending = np.int64(0)
     status = OK
     while count < n:
-        launch_r = m.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + m.launch_margin
-        if m.launch_box:
+        launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
+        if model.launch_box:
             if (line and geo[2] >= size - 2.0) or (not line and geo[1] >= hb - 2.0):
                 status = BOUNDARY
                 break
@@ -432,9 +434,9 @@ def _grow(n, m, marks, rng, times):
             status = BOUNDARY
             break
         gi, gf, words, start, blocks, cells, dirr, heads, field = grid
-        stuck, total, pending = _walk(m, launch_r, m.kill_factor * launch_r, total, pending, w, u, normal, scratch,
-                                      anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks,
-                                      cells, dirr, heads, field, geo, rs, rng)
+        stuck, total, pending = _walk(model, launch_r, model.kill_factor * launch_r, total, pending, w, u, normal,
+                                      scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
+                                      blocks, cells, dirr, heads, field, geo, rs, rng)
         if not stuck:
             status = STEP_LIMIT
             break
@@ -450,8 +452,8 @@ def _grow(n, m, marks, rng, times):
 
 
 @jit
-def _lockstep(n, m, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid):
-    """Grow with ``m.walkers`` walkers at once: a finite concentration.
+def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid):
+    """Grow with ``model.walkers`` walkers at once: a finite concentration.
 
     They start uniformly in the box (not on a particle) and take single
     steps in turn (unit ray casts, or Gaussian steps); none is relaunched, a
@@ -459,8 +461,9 @@ def _lockstep(n, m, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, g
     Takes over from ``_grow`` once the seed is placed (its arguments are
     ``_grow``'s state) and returns (count, status).
     """
-    dim, size, step, stickiness, walkers, max_steps = m.dim, m.size, m.step, m.stickiness, m.walkers, m.max_steps
-    line = m.seed_shape == LINE
+    dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
+    walkers, max_steps = model.walkers, model.max_steps
+    line = model.seed_shape == LINE
     up = dim - 1
     hb = 0.5 * size
     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
@@ -578,7 +581,7 @@ def grow_offlattice(n, p, marks, rng, times=None):
     times : float64 seconds at each of ``marks`` (NaN when not reached)
     """
     times = np.full(len(marks), np.nan) if times is None else times
-    points, steps, count, status = _grow(int(n), model(p), np.asarray(marks, np.int64), rng, times)
+    points, steps, count, status = _grow(int(n), model_from(p), np.asarray(marks, np.int64), rng, times)
     if count < len(points):  # don't keep the unused tail alive
         points, steps = points[:count].copy(), steps[:count].copy()
     return points, steps, int(status), times
