@@ -81,3 +81,12 @@ def checkpoint(marks, times, passed, count, t0):
         times[passed] = clock() - t0
         passed += 1
     return passed
+
+
+def grown(points, steps, count, status, times):
+    """A kernel's result as ``dlasweep.grow`` takes it: the first ``count``
+    points and diffusion times (copied when growth stopped short, so that
+    the unused tail is freed), the status code and the times."""
+    if count < len(points):
+        points, steps = points[:count].copy(), steps[:count].copy()
+    return points, steps, int(status), times

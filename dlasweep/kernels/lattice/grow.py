@@ -18,18 +18,8 @@ import numpy as np
 
 from ..._jit import clock, jit
 from .. import maps
-from ..model import (
-    BLOCK,
-    BOUNDARY,
-    EXHAUSTED,
-    LINE,
-    OK,
-    POINT,
-    STEP_LIMIT,
-    checkpoint,
-    model_from,
-    sticks_xo,
-)
+from .. import model as codes
+from ..model import checkpoint, grown, model_from, sticks_xo
 from ..walk import (
     below,
     direction,
@@ -237,7 +227,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     """
     t0 = clock()
     dim, size = model.dim, model.size
-    line = model.seed_shape == LINE
+    line = model.seed_shape == codes.LINE
     period = size if line else 0
     rs = seed_stream(rng)
     width = 64 if not line else 4 * size
@@ -245,9 +235,9 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     count = 0
     r_max = 0.0
     h_max = -1.0
-    if model.seed_shape == POINT:
+    if model.seed_shape == codes.POINT:
         count = min(n, 1)
-    elif model.seed_shape == BLOCK:
+    elif model.seed_shape == codes.BLOCK:
         count = min(n, 1 << dim)
         for p in range(count):
             for a in range(dim):
@@ -274,7 +264,7 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     and returns (count, status).
     """
     dim, size, walkers, max_steps, stickiness = model.dim, model.size, model.walkers, model.max_steps, model.stickiness
-    line = model.seed_shape == LINE
+    line = model.seed_shape == codes.LINE
     period = size if line else 0
     lo = -(size // 2)
     # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
@@ -295,13 +285,13 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     turn = 0
     total = np.int64(0)
     pending = np.int64(0)  # steps since the previous attachment
-    status = OK
+    status = codes.OK
     while count < n:
         if max_steps > 0 and total >= max_steps:
-            status = STEP_LIMIT
+            status = codes.STEP_LIMIT
             break
         if live == 0:
-            status = EXHAUSTED
+            status = codes.EXHAUSTED
             break
         w = turn
         turn = (turn + 1) % walkers
@@ -347,7 +337,7 @@ def _single(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, c
     dim, size, stickiness, max_steps, jumps = model.dim, model.size, model.stickiness, model.max_steps, model.jumps
     launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
     up = dim - 1
-    line = model.seed_shape == LINE
+    line = model.seed_shape == codes.LINE
     period = size if line else 0
     boxed = size > 0 and not line
     lo = -(size // 2)
@@ -365,7 +355,7 @@ def _single(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, c
     scratch = np.zeros(3)
     total = np.int64(0)
     pending = np.int64(0)  # steps since the previous attachment
-    status = OK
+    status = codes.OK
     # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
     box_lo = 0 if line else lo
     box_hi = size - 1 if line else hi
@@ -374,11 +364,11 @@ def _single(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, c
     level = 1
     while count < n:
         if max_steps > 0 and total >= max_steps:
-            status = STEP_LIMIT
+            status = codes.STEP_LIMIT
             break
         launch_r = model.launch_factor * (max(h_max, 0.0) if line else r_max) + model.launch_margin
         if boxed and not launch_box and launch_r > -lo - 1:
-            status = BOUNDARY
+            status = codes.BOUNDARY
             break
 
         if need_launch:
@@ -569,7 +559,7 @@ def _single(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, c
             stuck = False
             # with box launch, growth ends where the cluster meets the box
             if launch_box and _outside(q, dim, line, box_lo + 2, box_hi - 2):
-                status = BOUNDARY
+                status = codes.BOUNDARY
                 break
     return count, status
 
@@ -603,6 +593,4 @@ def grow_lattice(n, p, marks, rng, times=None):
     times = np.full(len(marks), np.nan) if times is None else times
     count, status = _grow(n, model, unit_moves(model.dim, moore), np.asarray(marks, np.int64), rng, points, steps,
                           times, *exit_tables(model.dim, moore))
-    if count < n:  # don't keep the unused tail alive
-        points, steps = points[:count].copy(), steps[:count].copy()
-    return points, steps, int(status), times
+    return grown(points, steps, count, status, times)

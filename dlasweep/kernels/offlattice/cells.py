@@ -181,6 +181,23 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
 
 
 @jit
+def face_gap(X0, X1, X2, dim, s):
+    """Distance from the grid point X to the nearest face of its cell of side ``2**s``.
+
+    Scalars only, so that the walk's hot loop pays no reference counting.
+    """
+    side = float(1 << s)
+    c = float((int(X0) >> s) << s)
+    f = min(X0 - c, c + side - X0)
+    c = float((int(X1) >> s) << s)
+    f = min(f, X1 - c, c + side - X1)
+    if dim == 3:
+        c = float((int(X2) >> s) << s)
+        f = min(f, X2 - c, c + side - X2)
+    return f
+
+
+@jit
 def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     """Lower bound on the centre distance from w to every particle, from the
     distance field and the maps.
@@ -211,13 +228,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     dm = 0.0
     if fd > 1:
         side = float(1 << FS)
-        c = float((i0 >> FS) << FS)
-        f = min(X0 - c, c + side - X0)
-        c = float((i1 >> FS) << FS)
-        f = min(f, X1 - c, c + side - X1)
-        if dim == 3:
-            c = float((i2 >> FS) << FS)
-            f = min(f, X2 - c, c + side - X2)
+        f = face_gap(X0, X1, X2, dim, FS)
         dm = (fd - 1) * side + f
     if 1 < fd < gi[17]:
         return dm
@@ -237,13 +248,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     if s == 0:
         return dm
     side = float(1 << s)
-    c = float((i0 >> s) << s)
-    f = min(X0 - c, c + side - X0)
-    c = float((i1 >> s) << s)
-    f = min(f, X1 - c, c + side - X1)
-    if dim == 3:
-        c = float((i2 >> s) << s)
-        f = min(f, X2 - c, c + side - X2)
+    f = face_gap(X0, X1, X2, dim, s)
     return max(dm, side + f)
 
 
@@ -296,13 +301,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
         dm = 0.0
         if fd > 1:
             # no particle in the coarse cells within fd - 1 of the walker's
-            c = float((i0 >> FS) << FS)
-            f = min(X0 - c, c + fside - X0)
-            c = float((i1 >> FS) << FS)
-            f = min(f, X1 - c, c + fside - X1)
-            if dim == 3:
-                c = float((i2 >> FS) << FS)
-                f = min(f, X2 - c, c + fside - X2)
+            f = face_gap(X0, X1, X2, dim, FS)
             dm = (fd - 1) * fside + f
         lo, hi = 0, 0
         if fd <= 1:
@@ -321,13 +320,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
                 lo = s
         if lo > 0:
             side = float(1 << lo)
-            c = float((i0 >> lo) << lo)
-            f = min(X0 - c, c + side - X0)
-            c = float((i1 >> lo) << lo)
-            f = min(f, X1 - c, c + side - X1)
-            if dim == 3:
-                c = float((i2 >> lo) << lo)
-                f = min(f, X2 - c, c + side - X2)
+            f = face_gap(X0, X1, X2, dim, lo)
             dm = max(dm, side + f)
     return dm
 

@@ -14,23 +14,14 @@ import numpy as np
 
 from ..._jit import clock, jit
 from .. import maps
-from ..model import (
-    BLOCK,
-    BOUNDARY,
-    EXHAUSTED,
-    LINE,
-    OK,
-    POINT,
-    STEP_LIMIT,
-    checkpoint,
-    model_from,
-    sticks,
-)
+from .. import model as codes
+from ..model import checkpoint, grown, model_from, sticks
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     FS,
     INF,
     build_grid,
+    face_gap,
     gather,
     insert,
     map_dist,
@@ -51,6 +42,12 @@ LCAP = 1024
 3D holds < 200)."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
+
+
+@jit
+def _neighbour_list():
+    """Empty arrays for ``cells.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
+    return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
 
 
 @jit
@@ -85,7 +82,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     """
     dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
     jumps, max_steps, ret, kill = model.jumps, model.max_steps, model.exact_return, model.kill
-    line = model.seed_shape == LINE
+    line = model.seed_shape == codes.LINE
     launch_box = model.launch_box
     boxed = size > 0 and not line
     ceiling = line and launch_box
@@ -204,13 +201,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                     dm = 0.0
                     if fd > 1:
                         # no particle in the coarse cells within fd - 1 of the walker's
-                        c = float((i0 >> FS) << FS)
-                        f = min(X0 - c, c + fside - X0)
-                        c = float((i1 >> FS) << FS)
-                        f = min(f, X1 - c, c + fside - X1)
-                        if dim == 3:
-                            c = float((i2 >> FS) << FS)
-                            f = min(f, X2 - c, c + fside - X2)
+                        f = face_gap(X0, X1, X2, dim, FS)
                         dm = (fd - 1) * fside + f
                     lo, hi = 0, 0
                     if fd <= 1:
@@ -229,13 +220,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                             lo = s
                     if lo > 0:
                         side = float(1 << lo)
-                        c = float((i0 >> lo) << lo)
-                        f = min(X0 - c, c + side - X0)
-                        c = float((i1 >> lo) << lo)
-                        f = min(f, X1 - c, c + side - X1)
-                        if dim == 3:
-                            c = float((i2 >> lo) << lo)
-                            f = min(f, X2 - c, c + side - X2)
+                        f = face_gap(X0, X1, X2, dim, lo)
                         dm = max(dm, side + f)
                 # <<< walk_bound
                 if dm > 0.0:
@@ -254,7 +239,8 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 g = min(g, w[up])
             g = min(g, gb)
             # ---- move
-            if step == 0.0 and jumps and g >= EPS:
+            # walk-on-spheres: exact contact takes over within EPS, Gaussian steps within GAUSS_JUMP steps
+            if jumps and (g >= EPS if step == 0.0 else g > GAUSS_JUMP * step):
                 s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 w[0] += g * u0
                 w[1] += g * u1
@@ -296,14 +282,6 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                     continue
                 contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
             else:
-                if jumps and g > GAUSS_JUMP * step:
-                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
-                    w[0] += g * u0
-                    w[1] += g * u1
-                    w[2] += g * u2
-                    total += 1
-                    pending += 1
-                    continue
                 total += 1
                 pending += 1
                 list_ok = False
@@ -331,8 +309,9 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
 @jit
 def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
     """Add the walker at w to the cluster; returns the new count, the grid
-    and whether the cluster outgrew it (then the particle is not yet in it:
-    the caller drops the grid and builds a larger one)."""
+    and, when the cluster outgrew the grid, its count of cell-list tiles,
+    else -1 (then the particle is not yet in the grid: the caller drops it
+    and builds a larger one)."""
     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
     up = dim - 1
     if line:
@@ -353,10 +332,10 @@ def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
     count += 1
     need = geo[2] if line else geo[1]
     if need + 8.0 > gi[16]:
-        return count, grid, True
+        return count, grid, gi[14]
     heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
     mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
-    return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), False
+    return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
 
 
 @jit
@@ -383,8 +362,8 @@ def _grow(n, model, marks, rng, times):
     """
     t0 = clock()
     dim, seed_shape, size = model.dim, model.seed_shape, model.size
-    line = seed_shape == LINE
-    nseed = 0 if line else (1 if seed_shape == POINT else 1 << dim)
+    line = seed_shape == codes.LINE
+    nseed = 0 if line else (1 if seed_shape == codes.POINT else 1 << dim)
     cap = max(n, 1)
     pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
     steps = maps.filled(cap, 0, np.int64)
@@ -395,7 +374,7 @@ def _grow(n, model, marks, rng, times):
     for q in range(count):
         r2 = 0.0
         for a in range(dim):
-            if seed_shape == BLOCK:
+            if seed_shape == codes.BLOCK:
                 pts[q, a] = float((q >> a) & 1)
             r2 += pts[q, a] ** 2
             geo[1] = max(geo[1], abs(pts[q, a]))
@@ -411,38 +390,32 @@ def _grow(n, model, marks, rng, times):
     normal = np.zeros(3)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
-    lx = np.empty(LCAP)
-    ly = np.empty(LCAP)
-    lz = np.zeros(LCAP)
-    li = np.empty(LCAP, np.int64)
-    mx = np.empty(LCAP)
-    my = np.empty(LCAP)
-    mz = np.zeros(LCAP)
-    mi = np.empty(LCAP, np.int64)
+    lx, ly, lz, li = _neighbour_list()
+    mx, my, mz, mi = _neighbour_list()
     hb = 0.5 * size
     boxed = size > 0 and not line
     total = np.int64(0)
     pending = np.int64(0)
-    status = OK
+    status = codes.OK
     while count < n:
         launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
         if model.launch_box:
             if (line and geo[2] >= size - 2.0) or (not line and geo[1] >= hb - 2.0):
-                status = BOUNDARY
+                status = codes.BOUNDARY
                 break
         elif boxed and launch_r > hb - 1.0:
-            status = BOUNDARY
+            status = codes.BOUNDARY
             break
         gi, gf, words, start, blocks, cells, dirr, heads, field = grid
         stuck, total, pending = _walk(model, launch_r, model.kill_factor * launch_r, total, pending, w, u, normal,
                                       scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
                                       blocks, cells, dirr, heads, field, geo, rs, rng)
         if not stuck:
-            status = STEP_LIMIT
+            status = codes.STEP_LIMIT
             break
-        count, grid, full = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
-        if full:
-            tiles = gi[14]
+        count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+        if tiles >= 0:
+            # drop the old grid (every name of it) before building the larger one: never two at once
             grid = no_grid()
             gi, gf, words, start, blocks, cells, dirr, heads, field = grid
             grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
@@ -463,7 +436,7 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
     """
     dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
     walkers, max_steps = model.walkers, model.max_steps
-    line = model.seed_shape == LINE
+    line = model.seed_shape == codes.LINE
     up = dim - 1
     hb = 0.5 * size
     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
@@ -473,10 +446,7 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
     u = np.zeros(3)
     e = np.zeros(3)
     normal = np.zeros(3)
-    mx = np.empty(LCAP)
-    my = np.empty(LCAP)
-    mz = np.zeros(LCAP)
-    mi = np.empty(LCAP, np.int64)
+    mx, my, mz, mi = _neighbour_list()
     for k in range(walkers):
         while True:
             for a in range(dim):
@@ -489,16 +459,16 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
     live = walkers
     total = np.int64(0)
     pending = np.int64(0)
-    status = OK
-    while count < n and status == OK:
+    status = codes.OK
+    while count < n and status == codes.OK:
         if live == 0:
-            status = EXHAUSTED
+            status = codes.EXHAUSTED
             break
         for k in range(walkers):
             if not alive[k]:
                 continue
             if max_steps > 0 and total >= max_steps:
-                status = STEP_LIMIT
+                status = codes.STEP_LIMIT
                 break
             for a in range(3):
                 w[a] = pos[k, a]
@@ -530,9 +500,8 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
                     total += moves
                     pending += moves
             if stuck:
-                count, grid, full = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
-                if full:
-                    tiles = gi[14]
+                count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+                if tiles >= 0:
                     grid = no_grid()
                     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
                     grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
@@ -561,27 +530,8 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
 def grow_offlattice(n, p, marks, rng, times=None):
     """Grow an off-lattice cluster; see ``dlasweep.grow`` for the meaning.
 
-    Parameters
-    ----------
-    n : int
-    p : dict
-        Model parameters as ``dlasweep.params.resolve`` returns them.
-    marks : int64 (K,)
-        Particle counts at which to record the time.
-    rng : numpy.random.Generator
-    times : float64 (K,), optional
-        Filled as the marks pass (NaN before), so that another thread can
-        watch the growth.
-
-    Returns
-    -------
-    points : float64 (n_grown, dim)
-    steps : int64 (n_grown,)
-    status : int code into ``dlasweep.params.STATUSES``
-    times : float64 seconds at each of ``marks`` (NaN when not reached)
+    Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
+    the float64 centres of unit-diameter disks (spheres), (n_grown, dim).
     """
     times = np.full(len(marks), np.nan) if times is None else times
-    points, steps, count, status = _grow(int(n), model_from(p), np.asarray(marks, np.int64), rng, times)
-    if count < len(points):  # don't keep the unused tail alive
-        points, steps = points[:count].copy(), steps[:count].copy()
-    return points, steps, int(status), times
+    return grown(*_grow(int(n), model_from(p), np.asarray(marks, np.int64), rng, times), times)
