@@ -92,14 +92,14 @@ def test_walk_bound_is_map_dist(dim, line):
 
 
 def test_the_lattice_walks_single_step_is_touches_and_step_to_spelled_out():
-    assert copy(lattice_grow._single, "touches") == body(lattice_grow.touches)
-    assert copy(lattice_grow._single, "step_to") == body(lattice_grow.step_to)
+    assert copy(lattice_grow._grow, "touches") == body(lattice_grow.touches)
+    assert copy(lattice_grow._grow, "step_to") == body(lattice_grow.step_to)
 
 
 @pytest.mark.parametrize("dim, moore, line", [(2, False, False), (2, True, False), (3, False, False),
                                               (3, True, False), (2, False, True), (3, False, True)])
 def test_touches_and_step_to_are_near_step(dim, moore, line):
-    """The single walker's step as ``_single`` spells it out (``touches``,
+    """The single walker's step as ``_grow`` spells it out (``touches``,
     the sticking rule, ``step_to``: the stream in registers) sticks and
     moves as ``_near_step`` does from the same sites and stream states, on
     random clusters, where the walk takes it: near the cluster or the
