@@ -44,7 +44,8 @@ def model_from(p) -> Model:
         seed_shape=SEED_SHAPES.index(p["seed_shape"]), size=int(p["size"]), launch_box=bool(launch_box),
         launch_factor=float(p["launch_factor"]), launch_margin=float(p["launch_margin"]),
         kill_factor=float(p["kill_factor"]),
-        # a box's walls absorb, so only an open launch circle (line) returns walkers
+        # without a kill circle, walkers beyond the launch circle (line) return to it
+        # exactly, unless the box's walls absorb them first or they start on them
         exact_return=bool(p["kill_factor"] == 0.0 and not launch_box and not boxed),
         kill=bool(p["kill_factor"] > 0.0 and not launch_box),
         jumps=bool(p["jumps"]), step=float(p["step"]), walkers=int(p["walkers"]), max_steps=int(p["max_steps"]),
@@ -53,8 +54,8 @@ def model_from(p) -> Model:
 
 @jit
 def sticks(stickiness, rng):
-    """The sticking rule, a walker at contact sticks with probability ``stickiness``,
-    with the draw from the numpy Generator ``rng``; at 1 nothing is drawn."""
+    """The sticking rule: a walker at contact sticks with probability
+    ``stickiness``, drawn from the numpy Generator ``rng``; at 1 nothing is drawn."""
     return stickiness >= 1.0 or rng.random() < stickiness
 
 

@@ -35,6 +35,7 @@ GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
 INF = np.inf
 
+
 @jit
 def _layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
