@@ -35,14 +35,32 @@ def body(function):
     return [line.rstrip() for line in textwrap.dedent(text).split("\n")]
 
 
-def copy(function, name):
-    """The lines of ``function`` between ``# >>> name`` and ``# <<< name``, dedented, comments at the mark left out."""
+def copies(function, name):
+    """Every run of lines of ``function`` between ``# >>> name`` and ``# <<< name``,
+    dedented, the comment lines at the first mark left out."""
     lines = inspect.getsource(function.py_func).split("\n")
-    start = next(i for i, line in enumerate(lines) if line.strip().startswith(f"# >>> {name}"))
-    while lines[start + 1].strip().startswith("#"):
-        start += 1
-    end = next(i for i, line in enumerate(lines) if line.strip() == f"# <<< {name}")
-    return [line.rstrip() for line in textwrap.dedent("\n".join(lines[start + 1:end])).split("\n")]
+    found = []
+    for start, line in enumerate(lines):
+        if not line.strip().startswith(f"# >>> {name}"):
+            continue
+        while lines[start + 1].strip().startswith("#"):
+            start += 1
+        end = next(i for i in range(start, len(lines)) if lines[i].strip() == f"# <<< {name}")
+        found.append([line.rstrip() for line in textwrap.dedent("\n".join(lines[start + 1:end])).split("\n")])
+    return found
+
+
+def copy(function, name):
+    """The one run of lines of ``function`` that ``copies`` finds."""
+    (found,) = copies(function, name)
+    return found
+
+
+def test_the_walks_two_jumps_are_one_text():
+    """The off-lattice walk's walk-on-spheres jump, spelled out for the
+    exact end game and again for Gaussian steps."""
+    first, second = copies(offlattice_grow._walk, "jump")
+    assert first == second and len(first) == 6
 
 
 def test_the_walks_map_bound_is_walk_bound_spelled_out():

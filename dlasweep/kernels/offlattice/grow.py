@@ -239,14 +239,17 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 g = min(g, w[up])
             g = min(g, gb)
             # ---- move
-            # walk-on-spheres: exact contact takes over within EPS, Gaussian steps within GAUSS_JUMP steps
-            if jumps and (g >= EPS if step == 0.0 else g > GAUSS_JUMP * step):
+            if step == 0.0 and jumps and g >= EPS:
+                # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
+                # holds the copies together): one condition for both timed 25% slower at
+                # 2D 1e6 once (even at 3e5, on a loaded machine), so the tested shape stays
                 s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 w[0] += g * u0
                 w[1] += g * u1
                 w[2] += g * u2
                 total += 1
                 pending += 1
+                # <<< jump
                 continue
             contact = False
             if step == 0.0 and jumps:
@@ -282,6 +285,16 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                     continue
                 contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
             else:
+                if jumps and g > GAUSS_JUMP * step:
+                    # >>> jump
+                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                    w[0] += g * u0
+                    w[1] += g * u1
+                    w[2] += g * u2
+                    total += 1
+                    pending += 1
+                    # <<< jump
+                    continue
                 total += 1
                 pending += 1
                 list_ok = False
