@@ -9,7 +9,9 @@ knows ``argv``.
 from __future__ import annotations
 
 import argparse
+import atexit
 import contextlib
+import os
 import sys
 import tempfile
 import time
@@ -44,6 +46,22 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
+def run() -> None:
+    """The ``dlasweep`` command: ``main``, then exit without tearing the interpreter down.
+
+    Freeing the modules a command loads (numba and LLVM, dask, pandas)
+    took 0.4 to 0.6 s at exit, as long as a small sweep's clusters take to
+    grow. By the time ``main`` returns every file is closed; the exit
+    handlers still run and the output is flushed before the process ends.
+    """
+    code = main()
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # a closed pipe, a closed stream
+            stream.flush()
+    os._exit(code)
+
+
 def main(argv=None) -> int:
     """Run the command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
@@ -58,6 +76,10 @@ def main(argv=None) -> int:
         return args.handler(args)
     except SystemExit as done:  # --help, --version
         return int(done.code or 0)
+    except BrokenPipeError:  # the reader left (``dlasweep info f.nc | head``): end quietly, as SIGPIPE would
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except KeyboardInterrupt:
         kept = "; finished tasks are kept, continue with --resume" if command == "dlasweep sweep" else ""
         _say(f"{command}: interrupted{kept}")

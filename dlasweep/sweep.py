@@ -234,15 +234,17 @@ def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
 
     ``stored``: per task, whether its positions are kept (``Spec.stores``).
     """
-    return [measure_task(task, counts, scales, root_seed, keep) for task, keep in zip(tasks, stored)]
+    history = growth_counts(counts)
+    return [measure_task(task, counts, scales, root_seed, keep, history) for task, keep in zip(tasks, stored)]
 
 
-def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
+def measure_task(task, counts, scales, root_seed, stored=True, history=None) -> dict:
     """Grow one cluster and measure every count; runs on a worker.
 
-    Its Rg along the growth is kept at ``growth_counts(counts)``; its
-    positions and diffusion times only when ``stored`` (else empty).
-    Never raises: a failure is returned as an ``error`` result with its message.
+    Its Rg along the growth is kept at ``history`` (default
+    ``growth_counts(counts)``); its positions and diffusion times only when
+    ``stored`` (else empty). Never raises: a failure is returned as an
+    ``error`` result with its message.
     """
     start = time.perf_counter()
     try:
@@ -252,17 +254,12 @@ def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
         points = cluster.points
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
-        lattice = cluster.params["model"] == "lattice"
-        rg = measure.radius_of_gyration(points)
-        history = growth_counts(counts)
+        measures = measure.cluster_measures(points, prefix, growth_counts(counts) if history is None else history,
+                                            lattice=cluster.params["model"] == "lattice", scales=scales)
         return {
-            "box_count": measure.prefix_box_counts(points, prefix, lattice=lattice, scales=scales)[1],
+            **measures,
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
-            "radius_gyration": rg[prefix - 1],
-            "radius_gyration_history": np.where(history <= len(rg), rg[np.minimum(history, len(rg)) - 1], np.nan),
-            "max_radius": measure.max_radius(points)[prefix - 1],
-            "anisotropy": measure.anisotropy(points, prefix),
             "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],

@@ -489,3 +489,32 @@ def test_prefix_box_counts_refuses_bad_input():
         measure.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
     with pytest.raises(ValueError, match="points"):
         measure.prefix_box_counts(np.zeros((3, 4)), [3])
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_cluster_measures_equal_the_functions_they_gather(dim, lattice):
+    # The sweep's one call per cluster against each measure on its own, bit
+    # for bit: clusters, random sets (sparse and full), sites beyond int32
+    # (box counts handed to box_counts), and history counts past the end.
+    rng = np.random.default_rng(10 + dim + 2 * lattice)
+    sets = [dlasweep.grow(n, seed, dim=dim, model="lattice" if lattice else "offlattice").points
+            for n, seed in [(1, 0), (400, 1), (1500, 2)]]
+    sets += [random_set(dim, seed % 2 == 0, int(rng.integers(2, 300)), 60, seed) for seed in range(4)]
+    if dim == 2:  # (in 3D, box_counts sorts 16**3 grids' boxes per side: slow, and the same route)
+        sets.append(random_set(dim, True, 12, 20, 9) * (2**30))
+    for points in sets:
+        n = len(points)
+        ends = np.array(some_prefixes(n, rng))
+        history = np.unique(np.r_[1, rng.integers(1, 2 * n + 2, 6)])
+        scales = default_scales(min(np.ptp(points, axis=0).max() + 2, 3000))
+        got = measure.cluster_measures(points, ends, history, lattice=lattice, scales=scales)
+        rg = radius_of_gyration(points)
+        np.testing.assert_array_equal(got["box_count"], measure.prefix_box_counts(points, ends, lattice, scales)[1])
+        np.testing.assert_array_equal(got["radius_gyration"], rg[ends - 1])
+        np.testing.assert_array_equal(got["radius_gyration_history"],
+                                      np.where(history <= n, rg[np.minimum(history, n) - 1], np.nan))
+        np.testing.assert_array_equal(got["max_radius"], max_radius(points)[ends - 1])
+        np.testing.assert_array_equal(got["anisotropy"], measure.anisotropy(points, ends))
+    with pytest.raises(ValueError, match="history"):
+        measure.cluster_measures(np.zeros((3, 2)), [3], [0])
