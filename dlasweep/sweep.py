@@ -371,9 +371,10 @@ class Parts:
                             result[name] = shape
                         continue
                     flat, shapes = z[name], z[f"{name}.shape"]
-                    ends = np.cumsum([math.prod(shape) for shape in shapes])
-                    for result, shape, end in zip(part, shapes, ends):
-                        result[name] = flat[end - math.prod(shape): end].reshape(shape)
+                    sizes = shapes.prod(axis=1)
+                    ends = np.cumsum(sizes)
+                    for result, shape, start, end in zip(part, shapes.tolist(), (ends - sizes).tolist(), ends.tolist()):
+                        result[name] = flat[start:end].reshape(shape)
             yield from (part[self.where[key][1]] for key in run)
 
 
