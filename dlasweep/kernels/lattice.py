@@ -20,6 +20,7 @@ import numpy as np
 
 from .._jit import clock, jit
 from . import maps
+from .stored import kept_on_disk
 from .walk import below, direction, return_to_plane, return_to_sphere, seed_stream, uniform, xdir, xo
 
 POINT, BLOCK, LINE = 0, 1, 2
@@ -129,7 +130,7 @@ def symmetry_classes(sites, probs):
     return reps, np.bincount(inverse.reshape(-1), weights=probs, minlength=len(reps))
 
 
-@lru_cache(maxsize=None)
+@kept_on_disk
 def exit_tables(dim, moore):
     """Alias tables of ``exit_law`` by symmetry class (``symmetry_classes``) for
     half-widths 0..TABLE_MAX[dim] (0 and 1 empty).
