@@ -299,12 +299,20 @@ class Parts:
     error; a failed one is computed again on resume, and a later part then
     holds it too. Knowing what is done reads only the indexes, once. The
     sweep sets ``done`` once its file is complete: the folder is removed.
+
+    The parts this run writes are also kept in memory, up to ``KEEP_BYTES``,
+    all but the clusters' positions and diffusion times: assembling the
+    dataset then reads back only what an earlier run wrote.
     """
+
+    KEEP_BYTES = 1 << 28
+    PER_PARTICLE = ("points", "diffusion_time")
 
     def __init__(self, path: Path):
         self.path = path
         self.done = False
         self._where = None
+        self._kept, self._kept_bytes = {}, 0
 
     @property
     def where(self) -> dict:
@@ -351,6 +359,10 @@ class Parts:
             raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
+        kept = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
+        size = sum(values.nbytes for values in kept.values())
+        if self._kept_bytes + size <= self.KEEP_BYTES:
+            self._kept[file], self._kept_bytes = {"keys": keys, **kept}, self._kept_bytes + size
 
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
@@ -363,7 +375,9 @@ class Parts:
         without reading it.
         """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
-            with self._reading(file), np.load(file) as z:
+            kept = self._kept.get(file, {})
+            with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
+                                       else np.load(file)) as z:
                 part = [{} for _ in z["keys"]]
                 for name in names:
                     if name.endswith(".shape"):
