@@ -13,6 +13,7 @@ import xarray as xr
 import dlasweep as dla
 from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
 from dlasweep import store
+from dlasweep.analysis import Readout
 from dlasweep.params import STATUSES
 from dlasweep.report import report
 
@@ -172,7 +173,7 @@ def drawn(monkeypatch, plot, ds, tmp_path):
     module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
     figures = []
     monkeypatch.setattr(module, "_save", lambda fig, path: figures.append(fig) or fig.savefig(path))
-    caption = plot(module._Sweep(ds), tmp_path / "plot.png")
+    caption = plot(Readout(ds), tmp_path / "plot.png")
     assert caption and (tmp_path / "plot.png").stat().st_size > 0
     (fig,) = figures
     fig.canvas.draw()
