@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, store
 from . import params as _params
+from . import store
+from ._version import __version__
 from .analysis import summarise
 from .fit import fit_mass_radius
 from .grow import compiled, grow
@@ -83,7 +84,7 @@ def _parser() -> argparse.ArgumentParser:
     one.add_argument("-n", type=_params.integer, required=True, help="number of particles, e.g. 100000 or 1e5")
     one.add_argument("--seed", type=_params.integer, default=0, help="random seed (default 0)")
     for name, param in _params.PARAMETERS.items():
-        one.add_argument(f"--{name.replace('_', '-')}", dest=name, **_option(param))
+        one.add_argument(f"--{name.replace('_', '-')}", dest=name, **_option(name, param))
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
     one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
@@ -128,12 +129,12 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _option(param) -> dict:
+def _option(name, param) -> dict:
     """``metavar`` and ``help`` of a model parameter's option, from its row of ``params.PARAMETERS``."""
-    default = f"Default: {param.shown or _text(param.default)}."
+    default = f"Default: {_params.shown_default(name)}."
     if isinstance(param.values, tuple):
         return {"metavar": "{" + ",".join(map(_text, param.values)) + "}", "help": f"{param.meaning}. {default}"}
-    return {"metavar": "V", "help": f"{param.meaning}. Allowed: {param.values}. {default}"}
+    return {"metavar": "V", "help": f"{param.meaning}. Allowed: {_params.allowed(name)}. {default}"}
 
 
 def _grow(args) -> int:
@@ -148,7 +149,7 @@ def _grow(args) -> int:
     try:
         given = {k: _params.coerce(k, getattr(args, k))
                  for k in _params.DEFAULTS if getattr(args, k) is not None}
-        _params.resolve(**given)
+        resolved = _params.resolve(**given)
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
         raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
@@ -162,9 +163,9 @@ def _grow(args) -> int:
         name, _, reason = str(err).partition(":")  # the message starts with the argument's name
         raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
 
-    with _growth_bar(args.n, given.get("model", _params.DEFAULTS["model"])) as bar:
+    with _growth_bar(args.n, resolved["model"]) as bar:
         progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
-        cluster = grow(args.n, args.seed, progress=progress, **given)
+        cluster = grow(args.n, args.seed, progress=progress, **resolved)
     if cluster.status != "ok":
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
     if out.suffix.lower() == ".nc":

@@ -44,8 +44,8 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from . import __version__
 from . import params as _params
+from ._version import __version__
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -113,8 +113,7 @@ SCHEMA = {
     **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}") for a in AXES},
     "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
     # Every model parameter: a sweep axis, else a scalar; strings have no units.
-    **{name: Variable((name,), type(p.default), None if isinstance(p.default, str) else "1", p.meaning)
-       for name, p in _params.PARAMETERS.items()},
+    **{name: Variable((name,), p.kind, p.units, p.meaning) for name, p in _params.PARAMETERS.items()},
 }
 """Every variable of a dataset dlasweep writes (a sweep, or one grown cluster): the one place
 its dims, type, units and long name are spelled. ``cluster_<name>`` coordinates take the
