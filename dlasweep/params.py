@@ -43,21 +43,23 @@ class Parameter:
         The value ``resolve`` fills in.
     values : tuple or str
         The allowed values: every one (tuple), or their range as a user
-        writes it (str). ``check`` (and for strings, the tuple) is what
+        writes it (str). ``checks`` (and for strings, the tuple) is what
         enforces them.
     meaning : str
         One line, a noun phrase: ``grow --help``, the netCDF ``long_name``
         and the README's table use it.
-    check : callable, optional
-        ``check(value, p, given) -> value``: raises ``ValueError`` naming
-        the parameter for a bad value, given ``p`` (every parameter, typed)
-        and ``given`` (what the caller set); returns the value, made
-        explicit where the default is a placeholder.
+    checks : tuple of callable
+        Each ``check(value, p, given)`` returns what is wrong with a value
+        (``resolve`` prefixes the parameter's name), or None, given ``p``
+        (every parameter, typed) and ``given`` (what the caller set).
     units : str or None
         The netCDF ``units`` of its variable; None for strings.
     shown : str, optional
         The default as a user reads it, where ``default`` is a placeholder
-        that ``check`` replaces.
+        that ``fill`` replaces.
+    fill : callable, optional
+        ``fill(value, p)``: the value made explicit (a placeholder default
+        replaced), before the checks.
     note : str
         More for the README's table, beyond ``meaning``.
     """
@@ -66,136 +68,88 @@ class Parameter:
     default: object
     values: tuple | str
     meaning: str
-    check: Callable | None = None
+    checks: tuple = ()
     units: str | None = "1"
     shown: str | None = None
+    fill: Callable | None = None
     note: str = ""
-
-
-def _dim(dim, p, given):
-    if dim not in (2, 3):
-        raise ValueError(f"dim: {dim} is not 2 or 3")
-    return dim
-
-
-def _stickiness(s, p, given):
-    if not 0.0 < s <= 1.0:
-        raise ValueError(f"stickiness: {s} is not in (0, 1]")
-    return s
-
-
-def _neighbours(nb, p, given):
-    dim = p["dim"]
-    if nb == 0:
-        nb = 2 * dim
-    if nb not in (2 * dim, 3**dim - 1):
-        raise ValueError(f"neighbours: {nb} is not {2 * dim} or {3**dim - 1} for dim={dim}")
-    if p["model"] == "offlattice" and "neighbours" in given and nb != 2 * dim:
-        raise ValueError("neighbours: only lattice models have a neighbourhood")
-    return nb
-
-
-def _seed_shape(shape, p, given):
-    if shape == "line" and p["size"] == 0:
-        raise ValueError("seed_shape: 'line' needs size > 0 (the substrate's periodic width)")
-    return shape
 
 
 MIN_SIZE = 8
 """Smallest box side to grow in."""
 
 
-def _size(size, p, given):
-    if size < 0:
-        raise ValueError(f"size: {size} is negative")
-    if 0 < size < MIN_SIZE:
-        raise ValueError(f"size: {size} is below {MIN_SIZE}, too small to grow in")
-    return size
+def _below(low, shown, why=""):
+    """A check: a value below ``low`` (written ``shown``) is refused, with ``why``."""
+    return lambda v, p, given: f"{v} is below {shown}{why}" if v < low else None
 
 
-def _launch(launch, p, given):
-    if launch == "box" and p["size"] == 0:
-        raise ValueError("launch: 'box' needs size > 0")
-    return launch
+def _negative(v, p, given):
+    return f"{v} is negative" if v < 0 else None
 
 
-def _launch_factor(lf, p, given):
-    if lf < 1.0:
-        raise ValueError(f"launch_factor: {lf} is below 1 (the launch circle must enclose the cluster)")
-    return lf
-
-
-def _launch_margin(lm, p, given):
-    if lm < 1.0:
-        raise ValueError(f"launch_margin: {lm} is below 1")
-    return lm
-
-
-def _kill_factor(kf, p, given):
-    if kf != 0.0 and kf <= 1.0:
-        raise ValueError(f"kill_factor: {kf} must be 0 (exact return) or > 1")
-    if kf != 0.0 and p["launch"] == "box":
-        raise ValueError("kill_factor: a kill circle needs launch='circle' (box launches start outside it)")
-    return kf
-
-
-def _step(st, p, given):
-    if st < 0.0:
-        raise ValueError(f"step: {st} is negative")
-    if st > 0.0 and p["model"] == "lattice":
-        raise ValueError("step: a step length applies only to model='offlattice'")
-    return st
-
-
-def _walkers(w, p, given):
-    if w < 1:
-        raise ValueError(f"walkers: {w} is below 1")
-    if w > 1 and p["size"] == 0:
-        raise ValueError("walkers: more than one walker needs size > 0 (they start uniformly in the box)")
-    return w
-
-
-def _max_steps(ms, p, given):
-    if ms < 0:
-        raise ValueError(f"max_steps: {ms} is negative")
-    return ms
+def _neighbourhood(nb, p):
+    """``neighbours`` made explicit: 0 stands for the nearest neighbours, 2*dim."""
+    return 2 * p["dim"] if nb == 0 else nb
 
 
 PARAMETERS = {
     "model": Parameter(str, "lattice", MODELS, "particle positions: square/cubic lattice sites, or unit-diameter "
                                                "disks/spheres in continuous space", units=None),
-    "dim": Parameter(int, 2, (2, 3), "dimension of space", _dim),
-    "stickiness": Parameter(float, 1.0, "(0, 1]", "probability to stick at each contact", _stickiness),
-    "neighbours": Parameter(int, 0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours",
-                            _neighbours, shown="2*dim"),
-    "seed_shape": Parameter(str, "point", SEED_SHAPES, "seed: one particle, a 2**dim block, or a substrate (line "
-                                                       "in 2D, plane in 3D; periodic sides of width size)",
-                            _seed_shape, units=None, note="the substrate is not counted in the points"),
+    "dim": Parameter(int, 2, (2, 3), "dimension of space",
+                     checks=(lambda d, p, given: None if d in (2, 3) else f"{d} is not 2 or 3",)),
+    "stickiness": Parameter(float, 1.0, "(0, 1]", "probability to stick at each contact",
+                            checks=(lambda s, p, given: None if 0.0 < s <= 1.0 else f"{s} is not in (0, 1]",)),
+    "neighbours": Parameter(
+        int, 0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours", shown="2*dim",
+        fill=_neighbourhood,
+        checks=(lambda nb, p, given: None if nb in (2 * p["dim"], 3 ** p["dim"] - 1)
+                else f"{nb} is not {2 * p['dim']} or {3 ** p['dim'] - 1} for dim={p['dim']}",
+                lambda nb, p, given: "only lattice models have a neighbourhood"
+                if p["model"] == "offlattice" and "neighbours" in given and nb != 2 * p["dim"] else None)),
+    "seed_shape": Parameter(
+        str, "point", SEED_SHAPES, "seed: one particle, a 2**dim block, or a substrate (line in 2D, plane in 3D; "
+                                   "periodic sides of width size)", units=None,
+        note="the substrate is not counted in the points",
+        checks=(lambda v, p, given: "'line' needs size > 0 (the substrate's periodic width)"
+                if v == "line" and p["size"] == 0 else None,)),
     "size": Parameter(int, 0, f"0 or an integer >= {MIN_SIZE}", "box side in lattice spacings (particle diameters "
-                                                                "off the lattice), 0 = unbounded", _size),
+                                                                "off the lattice), 0 = unbounded",
+                      checks=(_negative, lambda v, p, given: f"{v} is below {MIN_SIZE}, too small to grow in"
+                              if 0 < v < MIN_SIZE else None)),
     "launch": Parameter(str, "circle", LAUNCHES, "release on a circle/sphere of radius launch_factor*r_max + "
                                                  "launch_margin, or uniformly on the box surface (needs size > 0)",
-                        _launch, units=None),
+                        units=None,
+                        checks=(lambda v, p, given: "'box' needs size > 0" if v == "box" and p["size"] == 0
+                                else None,)),
     "launch_factor": Parameter(float, 1.0, ">= 1", "launch radius over the cluster's largest radius r_max",
-                               _launch_factor),
-    "launch_margin": Parameter(float, 2.0, ">= 1", "launch radius beyond launch_factor*r_max", _launch_margin),
-    "kill_factor": Parameter(float, 0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the "
-                                                     "launch circle, none killed", _kill_factor,
-                             note="the exact return draws from the Poisson kernel (2D) or escapes with probability "
-                                  "1-R/r (3D); > 1: killed and relaunched beyond kill_factor * launch radius"),
+                               checks=(_below(1.0, "1", " (the launch circle must enclose the cluster)"),)),
+    "launch_margin": Parameter(float, 2.0, ">= 1", "launch radius beyond launch_factor*r_max",
+                               checks=(_below(1.0, "1"),)),
+    "kill_factor": Parameter(
+        float, 0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the launch circle, none "
+                                "killed",
+        note="the exact return draws from the Poisson kernel (2D) or escapes with probability 1-R/r (3D); > 1: "
+             "killed and relaunched beyond kill_factor * launch radius",
+        checks=(lambda kf, p, given: f"{kf} must be 0 (exact return) or > 1" if kf != 0.0 and kf <= 1.0 else None,
+                lambda kf, p, given: "a kill circle needs launch='circle' (box launches start outside it)"
+                if kf != 0.0 and p["launch"] == "box" else None)),
     "jumps": Parameter(bool, True, "true or false", "exact first-passage jumps far from the cluster (true), or "
                                                     "single steps everywhere (false)"),
     "step": Parameter(float, 0.0, "0 or > 0", "off-lattice step: 0 = move to exact contact, > 0 = standard "
                                               "deviation of fixed Gaussian steps with overlap checks (can tunnel)",
-                      _step),
+                      checks=(_negative, lambda st, p, given: "a step length applies only to model='offlattice'"
+                              if st > 0.0 and p["model"] == "lattice" else None)),
     "walkers": Parameter(int, 1, "an integer >= 1", "walkers at once; more than 1 start uniformly in the box and "
-                                                    "move in lockstep, none relaunched", _walkers,
-                         note="lockstep walkers take single steps"),
+                                                    "move in lockstep, none relaunched",
+                         note="lockstep walkers take single steps",
+                         checks=(_below(1, "1"), lambda w, p, given: "more than one walker needs size > 0 (they "
+                                 "start uniformly in the box)" if w > 1 and p["size"] == 0 else None)),
     "max_steps": Parameter(int, 0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
-                                                      "status step_limit when it runs out", _max_steps),
+                                                      "status step_limit when it runs out", checks=(_negative,)),
 }
 """Every model parameter a cluster depends on (README, "The model"), once: its type,
-default, allowed values, check, meaning and units. ``resolve``, ``coerce``, the
+default, allowed values, checks, meaning and units. ``resolve``, ``coerce``, the
 command line's options and help (``cli``), the spec's checks (``spec``, through
 ``resolve``), the dataset's attributes (``store.SCHEMA``) and the README's table
 (``markdown_table``, checked by a test) derive from it."""
@@ -235,8 +189,8 @@ def resolve(**params) -> dict:
     """Validate model parameters and fill in defaults, from ``PARAMETERS``.
 
     Every value is first converted to its parameter's type (and a string
-    checked against its choices), then each parameter's ``check`` runs, in
-    the table's order.
+    checked against its choices), then each parameter is made explicit
+    (``fill``) and checked (``checks``), in the table's order.
 
     Parameters
     ----------
@@ -262,26 +216,31 @@ def resolve(**params) -> dict:
         if par.kind is str:
             _choice(name, p[name], par.values)
     for name, par in PARAMETERS.items():
-        if par.check is not None:
-            p[name] = par.check(p[name], p, params)
+        if par.fill is not None:
+            p[name] = par.fill(p[name], p)
+        for check in par.checks:
+            problem = check(p[name], p, params)
+            if problem:
+                raise ValueError(f"{name}: {problem}")
     return p
 
 
-def _text(value) -> str:
-    """A value as a user writes it on the command line or in a spec (``true``, not ``True``)."""
+def text(value) -> str:
+    """A value (numpy scalars too) as a user writes it on the command line or in a spec: ``true``, not ``True``."""
+    value = value.item() if hasattr(value, "item") else value
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
 def allowed(name) -> str:
     """The allowed values of a parameter as a user reads them: ``lattice, offlattice`` or ``(0, 1]``."""
     values = PARAMETERS[name].values
-    return ", ".join(map(_text, values)) if isinstance(values, tuple) else values
+    return ", ".join(map(text, values)) if isinstance(values, tuple) else values
 
 
 def shown_default(name) -> str:
     """The default of a parameter as a user reads it (``2*dim`` for the neighbourhood)."""
     par = PARAMETERS[name]
-    return par.shown or _text(par.default)
+    return par.shown or text(par.default)
 
 
 def markdown_table() -> str:

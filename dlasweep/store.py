@@ -430,7 +430,7 @@ def open_sweep(path) -> xr.Dataset:
     try:
         ds = xr.open_dataset(path, engine="netcdf4")
     except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...
-        raise StoreError(f"{path}: not a readable netCDF file ({_one_line(err)})") from None
+        raise StoreError(f"{path}: not a readable netCDF file ({one_line(err)})") from None
     missing = [v for v in ("cluster_particles", "x", "y", "diffusion_time") if v not in ds.variables]
     if not str(ds.attrs.get("source", "")).startswith("dlasweep") or missing:
         ds.close()
@@ -442,7 +442,7 @@ def open_sweep(path) -> xr.Dataset:
                 var.load()
     except Exception as err:
         ds.close()
-        raise StoreError(f"{path}: damaged or truncated ({_one_line(err)})") from None
+        raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
     return ds
 
 
@@ -535,5 +535,6 @@ def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def _one_line(err) -> str:
+def one_line(err) -> str:
+    """An exception's message on one line (its type's name when it has none): error messages stay one line."""
     return " ".join(str(err).split()) or err.__class__.__name__
