@@ -639,6 +639,11 @@ class Readout:
         """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
         return self.s[name][{**dict(zip(self.config_dims, config)), **index}].values
 
+    def bars(self, name, config):
+        """Summary variable ``name`` at a configuration, every count, and its 95% CI as ``error_bars``."""
+        mean = self.at(name, config)
+        return mean, error_bars(mean, self.at(f"{name}_ci_lo", config), self.at(f"{name}_ci_hi", config))
+
     def value(self, name, config):
         """The value of swept parameter (or ``size``) ``name`` at a configuration, as a plain Python value."""
         return plain(self.ds[name].values[config[self.config_dims.index(name)]])
@@ -729,6 +734,11 @@ def plain(value):
     """A numpy scalar (or bytes) as a plain Python value (str)."""
     value = value.item() if hasattr(value, "item") else value
     return value.decode() if isinstance(value, bytes) else value
+
+
+def error_bars(mean, lo, hi):
+    """The lengths below and above ``mean`` of its interval ``[lo, hi]``, 0 where there is none (a ``yerr``)."""
+    return [np.nan_to_num(mean - lo), np.nan_to_num(hi - mean)]
 
 
 def fitted_line(x, y, slope):

@@ -2,7 +2,8 @@
 
 Draws and writes what ``analysis.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
-Rg, costs); it computes nothing else. Writes ``summary.csv``,
+Rg, costs), read through ``analysis.Readout`` (rows, labels, the exact
+reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
 ``summary.md``, PNG plots and ``report.md`` into one folder. Plots the
 dataset has no data for are skipped, never drawn empty.
 """
@@ -20,6 +21,7 @@ from .analysis import (
     Readout,
     bias,
     cluster_radius,
+    error_bars,
     fitted_line,
     fitted_scales,
     plain,
@@ -295,9 +297,7 @@ def _dimension_vs_n(sweep, path):
                             color="C0", alpha=0.15, lw=0, label="local slope D_eff(n), 95% band")
             ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8)
         for e, (name, title) in enumerate(ESTIMATORS):
-            mean = sweep.at(name, config)
-            err = [np.nan_to_num(mean - sweep.at(f"{name}_ci_lo", config)),
-                   np.nan_to_num(sweep.at(f"{name}_ci_hi", config) - mean)]
+            mean, err = sweep.bars(name, config)
             ax.errorbar(sweep.counts * (1.06 if e else 1.0), mean, yerr=err, color=f"C{3 * e}", marker="os"[e],
                         mfc="none" if e else f"C{3 * e}", ls="none", capsize=2, label=title)
         for n, d, seeds in zip(sweep.counts, sweep.at("D", config), sweep.at("D_seeds", config)):
@@ -354,9 +354,7 @@ def _anisotropy(sweep, path):
         return None
     fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
-        mean = sweep.at("anisotropy", config)
-        err = [np.nan_to_num(mean - sweep.at("anisotropy_ci_lo", config)),
-               np.nan_to_num(sweep.at("anisotropy_ci_hi", config) - mean)]
+        mean, err = sweep.bars("anisotropy", config)
         ax.errorbar(sweep.counts * 1.02 ** c, mean, yerr=err, color=_colour(c), marker="o", capsize=2,
                     label=sweep.label(config))
     ax.axhline(0, color="k", lw=0.8)
@@ -528,8 +526,8 @@ def _failure(sweep, path):
             if axis == "size":
                 xs = xs / np.array([cluster_radius(r) for r in rows])
             y = np.array([r[name] for r in rows])
-            err = [np.nan_to_num(y - [r[f"{name}_ci_lo"] for r in rows]),
-                   np.nan_to_num(np.array([r[f"{name}_ci_hi"] for r in rows]) - y)]
+            err = error_bars(y, np.array([r[f"{name}_ci_lo"] for r in rows]),
+                             np.array([r[f"{name}_ci_hi"] for r in rows]))
             panel.errorbar(xs, y, yerr=err, color="C0", marker="o", capsize=2, ls="-", label=f"{axis} varied")
             _mark_missing(panel, xs, y)
             flagged = np.array([r["flagged"] for r in rows], bool)
