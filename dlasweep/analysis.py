@@ -633,6 +633,10 @@ class Readout:
         # Lattice clusters cross over to axis-aligned growth: the off-lattice value is not theirs.
         self.reference = None if self.lattice else REFERENCE_D.get(self.dim)
         self.methods = method_axes(ds)
+        self.n_clusters = len(self.configs) * ds.sizes["seed"]
+        """Clusters grown: one per configuration and seed."""
+        self.n_stored = ds.sizes.get("cluster", 0)
+        """Clusters whose positions the dataset keeps."""
         self._rows = {}
 
     def at(self, name, config, **index):

@@ -93,13 +93,12 @@ def _cluster_points(ds, i):
     return cluster_points(ds, i)
 
 
-def _stored(ds) -> str:
+def _stored(sweep) -> str:
     """How many clusters keep their positions, and what the report draws from them."""
-    stored = ds.sizes.get("cluster", 0)
-    if stored == 0:
+    if sweep.n_stored == 0:
         return "none stored with its positions (no gallery, no diffusion times; every curve is measured)"
-    if stored < ds["n_grown"].size // ds.sizes["n_particles"]:
-        return f"{stored} stored with their positions (the gallery and the diffusion times are of those)"
+    if sweep.n_stored < sweep.n_clusters:
+        return f"{sweep.n_stored} stored with their positions (the gallery and the diffusion times are of those)"
     return "every one stored with its positions"
 
 
@@ -591,7 +590,7 @@ def _write_report(sweep, figures, path) -> Path:
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
         "",
-        f"{len(sweep.configs) * ds.sizes['seed']} clusters, {_stored(ds)}; counts "
+        f"{sweep.n_clusters} clusters, {_stored(sweep)}; counts "
         f"{', '.join(map(str, sweep.counts))}; {ds.sizes['seed']} seeds per configuration; root seed "
         f"{ds.attrs.get('root_seed')}; {ds.attrs.get('source', 'dlasweep')}.",
         "",
