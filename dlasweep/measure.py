@@ -860,20 +860,3 @@ def _anisotropy(points, counts):
             if outer:
                 out[c] = (total / outer - isotropic) / (1 - isotropic)
     return out
-
-
-def mass_within(points, radii) -> np.ndarray:
-    """N(r): number of particles whose centre lies within r of the seed (first point).
-
-    Parameters
-    ----------
-    points : array_like, (n, dim)
-    radii : array_like
-        Radii r; the seed itself is counted for every r >= 0.
-
-    Returns
-    -------
-    ndarray of int64, shaped like ``radii``
-    """
-    distances = np.sort(_seed_distances(points))
-    return np.searchsorted(distances, np.asarray(radii, dtype=np.float64), side="right").astype(np.int64)

@@ -273,18 +273,11 @@ def measure_task(task, counts, scales, root_seed, stored=True, history=None) -> 
 def error_result(counts, n_scales, dim, message) -> dict:
     """The result recorded for a task that raised (or whose worker kept dying)."""
     n_counts = len(counts)
-    nan = np.full(n_counts, np.nan)
-    return {
-        "box_count": np.zeros((n_counts, n_scales), np.int64),
-        "n_grown": np.zeros(n_counts, np.int64),
-        "status": np.full(n_counts, STATUSES.index("error"), np.int8),
-        "radius_gyration": nan, "max_radius": nan, "anisotropy": nan, "wall_time": nan,
-        "radius_gyration_history": np.full(len(growth_counts(counts)), np.nan),
-        "walk_steps": np.zeros(n_counts, np.int64),
-        "points": np.zeros((0, dim)),
-        "diffusion_time": np.zeros(0, np.int64),
-        "error": np.array(" ".join(message.split())),
-    }
+    shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
+    result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
+    result["status"][:] = STATUSES.index("error")
+    return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
+            "error": np.array(" ".join(message.split()))}
 
 
 class Parts:
@@ -580,14 +573,8 @@ def _assemble(spec, parts):
     history = growth_counts(spec.counts)
     tasks = list(spec.tasks())
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
-    science = {
-        "box_count": np.zeros((*grid, len(scales)), np.int64),
-        "n_grown": np.zeros(grid, np.int64),
-        "status": np.zeros(grid, np.int8),
-        "walk_steps": np.zeros(grid, np.int64),
-        **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
-        "radius_gyration_history": np.full((*spec.shape, len(history)), np.nan),
-    }
+    shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
+    science = {name: store.blank(name, shapes.get(name, grid)) for name in (*store.SCIENCE, "wall_time")}
     sizes, failed = [], []
     for task, result in zip(tasks, parts.results((t.key for t in tasks), (*science, "points.shape", "error"))):
         for name, values in science.items():
