@@ -523,10 +523,8 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
 
     Parameters
     ----------
-    points : array_like, (n, dim)
-        Positions in attachment order.
-    ends : array_like of int
-        Prefix lengths, each in 1..n.
+    points, ends
+        As for ``prefix_box_counts``.
     history : array_like of int
         Prefix lengths >= 1 at which to record the radius of gyration; NaN beyond n.
     lattice, scales, offsets
