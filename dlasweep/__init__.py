@@ -5,24 +5,44 @@ Data flows one way: kernels -> ``grow`` -> ``measure`` -> ``fit`` -> ``sweep``
 """
 
 import importlib
+import sys
+import types
 
-__version__ = "0.1.0"
-
+from ._version import __version__
+from .fit import fit_dimension, fit_mass_radius
 from .grow import Cluster, grow
 from .measure import box_counts, radius_of_gyration
-from .fit import fit_dimension, fit_mass_radius
 from .spec import load_spec
-from .report import report
 
-# dask and xarray load on first use, so that growing a cluster (a benchmark
-# probe, a worker) carries neither
-_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "summarise": "analysis"}
+# dask, xarray and matplotlib load on first use, so that growing a cluster (a
+# benchmark probe, a worker) carries none of them
+_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "summarise": "analysis",
+         "report": "report"}
+
+
+class _Package(types.ModuleType):
+    """The package, whose ``report`` stays the function when the submodule of that name loads.
+
+    Importing a submodule binds it on its package; loaded lazily, module
+    ``dlasweep.report`` would then hide function ``dlasweep.report``.
+    """
+
+    def __setattr__(self, name, value):
+        if not (isinstance(value, types.ModuleType) and _LAZY.get(name) == name):
+            super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name):
     if name in _LAZY:
         return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(__all__)
 
 
 __all__ = [

@@ -186,34 +186,16 @@ def target_table(ds: xr.Dataset) -> list[str]:
 
 
 def _to_dataset(rows) -> xr.Dataset:
-    def column(key, dtype=None):
-        return ("run", np.array([r[key] for r in rows], dtype=dtype))
+    """The measurements as a Dataset on ``run``, laid out and described by ``store.BENCH_SCHEMA``."""
+    from .store import BENCH_SCHEMA, attributes
 
-    ds = xr.Dataset(
-        {
-            "seconds": column("seconds", float),
-            "n_grown": column("n_grown", np.int64),
-            "walk_steps": column("steps", np.int64),
-            "peak_memory": column("peak_mb", float),
-            "added_memory": column("added_mb", float),
-        },
-        coords={"model": column("model", str), "method": column("method", str), "n": column("n", np.int64)},
-    )
-    units = {"seconds": "s", "n_grown": "1", "walk_steps": "1", "peak_memory": "MiB", "added_memory": "MiB", "n": "1"}
-    names = {
-        "seconds": "wall time to grow the cluster, compilation excluded",
-        "n_grown": "particles attached",
-        "walk_steps": "walk steps and jumps in all",
-        "peak_memory": "peak resident memory of the process",
-        "added_memory": "peak resident memory added by growing the cluster",
-        "n": "target particle count",
-        "model": "model and dimension",
-        "method": "exact jumps or the naive single-step walk with a kill circle",
-    }
-    for key in list(ds.data_vars) + ["n", "model", "method"]:
-        ds[key].attrs["long_name"] = names[key]
-        if key in units:
-            ds[key].attrs["units"] = units[key]
+    keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
+    columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype),
+                      attributes(name, schema=BENCH_SCHEMA))
+               for name, var in BENCH_SCHEMA.items()}
+    coords = ("model", "method", "n")
+    ds = xr.Dataset({name: column for name, column in columns.items() if name not in coords},
+                    coords={name: columns[name] for name in coords})
     ds.attrs["title"] = "dlasweep kernel benchmark"
     return ds
 

@@ -27,6 +27,10 @@ Z95 = 1.959963984540054
 """Two-sided 95% quantile of the standard normal: every interval here is a 95% CI."""
 
 _OCTAVE = np.log(2.0)
+START_FRACTION = 0.05
+"""Default end of the transient of a growth history, as a fraction of its largest count (``mass_radius_counts``)."""
+MIN_DECADES = 1.0
+"""Default narrowest window a fit of D accepts, in decades of its variable (both fits)."""
 
 
 @dataclass(frozen=True)
@@ -209,7 +213,7 @@ def fit_dimension(
     *,
     min_scale: float = 2.0,
     max_fraction: float = 0.25,
-    min_decades: float = 1.0,
+    min_decades: float = MIN_DECADES,
     min_points: int = 4,
     flat_tolerance: float = 0.02,
 ) -> Fit:
@@ -263,7 +267,7 @@ def _families(scales):
     return whole // (whole & -whole)
 
 
-def mass_radius_counts(n_max: int, *, start_fraction: float = 0.05, min_count: int = 50,
+def mass_radius_counts(n_max: int, *, start_fraction: float = START_FRACTION, min_count: int = 50,
                        per_octave: int = 8) -> np.ndarray:
     """Particle counts at which a growth history is sampled for ``fit_mass_radius``.
 
@@ -288,10 +292,10 @@ def fit_mass_radius(
     rg,
     n=None,
     *,
-    start_fraction: float = 0.05,
+    start_fraction: float = START_FRACTION,
     min_count: int = 50,
     per_octave: int = 8,
-    min_decades: float = 1.0,
+    min_decades: float = MIN_DECADES,
     min_points: int = 6,
     flat_tolerance: float = 0.02,
 ) -> Fit:

@@ -490,11 +490,10 @@ def prefix_box_counts(points, ends, lattice: bool = True, scales=None, offsets: 
     """``box_counts(points[:m], lattice, scales, offsets)`` for every m in ``ends``, in one call.
 
     The counts are those of ``box_counts``, bit for bit (the same rule and
-    kernels; a test holds the two together): the sweep measures every
-    particle count of a cluster with it. The work runs in compiled code that
-    releases the GIL, so threads measure clusters in parallel; a prefix with
-    a grid too large for a bitmap (a sparse set, not a cluster) is handed to
-    ``box_counts``.
+    kernels; a test holds the two together). The work runs in compiled code
+    that releases the GIL, so threads measure clusters in parallel; a prefix
+    with a grid too large for a bitmap (a sparse set, not a cluster) is
+    handed to ``box_counts``.
 
     Parameters
     ----------
@@ -510,28 +509,75 @@ def prefix_box_counts(points, ends, lattice: bool = True, scales=None, offsets: 
     scales : ndarray of float64
     counts : ndarray of int64, (len(ends), len(scales))
     """
-    p = _checked_points(points, offsets)
-    ends = np.asarray(ends, np.int64).ravel()
-    if not (ends.size and 1 <= ends.min() and ends.max() <= len(p)):
-        raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
-    p = p[: ends.max()]
-    low = np.array([c.min() for c in p.T])
-    extent = float(max(c.max() - c.min() for c in p.T)) + 2 * _HALF
-    if scales is None:
-        scales = default_scales(extent)
-    # A sweep measures every cluster at the same scales: checked and planned once.
-    scales, plan = _plan(np.asarray(scales, np.float64).ravel().tobytes(), offsets, p.shape[1])
-    counts = np.ones((len(ends), len(scales)), np.int64)
-    integer = p.dtype.kind == "i"
-    done = np.zeros(len(ends), bool)
-    if not integer or extent < 2**31:
-        if integer:  # from the low corner, exactly: each prefix is shifted again to its own
+    boxes = _PrefixBoxes(points, ends, lattice, scales, offsets)
+    boxes.finish(_prefix_counts(*boxes.args))
+    return boxes.scales.copy(), boxes.counts
+
+
+def cluster_measures(points, ends, history, lattice: bool = True, scales=None, offsets: int = 4) -> dict:
+    """Everything a sweep records of one cluster's prefixes, in one compiled call that releases the GIL.
+
+    Equal, bit for bit, to the functions it gathers (a test holds them
+    together); one call instead of five keeps a thread's Python time per
+    cluster small next to the growth of a small cluster.
+
+    Parameters
+    ----------
+    points, ends
+        As for ``prefix_box_counts``.
+    history : array_like of int
+        Prefix lengths >= 1 at which to record the radius of gyration; NaN beyond n.
+    lattice, scales, offsets
+        As for ``box_counts``.
+
+    Returns
+    -------
+    dict
+        ``box_count`` (``prefix_box_counts``'s counts), and at ``ends``:
+        ``radius_gyration``, ``max_radius``, ``anisotropy``; at ``history``:
+        ``radius_gyration_history``.
+    """
+    boxes = _PrefixBoxes(points, ends, lattice, scales, offsets)
+    history = np.asarray(history, np.int64).ravel()
+    if history.size and history.min() < 1:
+        raise ValueError("history: expected prefix lengths >= 1")
+    positions = np.ascontiguousarray(boxes.points, dtype=np.float64)
+    rg, rg_history, radius, shape = np.empty(len(boxes.ends)), np.empty(len(history)), np.empty(len(boxes.ends)), \
+        np.empty(len(boxes.ends))
+    boxes.finish(_cluster_measures(positions, boxes.ends, history, rg, rg_history, radius, shape, *boxes.args))
+    return {"box_count": boxes.counts, "radius_gyration": rg, "radius_gyration_history": rg_history,
+            "max_radius": radius, "anisotropy": shape}
+
+
+class _PrefixBoxes:
+    """The checked inputs of ``_prefix_counts`` for prefixes of one set, and the counts it fills in."""
+
+    def __init__(self, points, ends, lattice, scales, offsets):
+        p = _checked_points(points, offsets)
+        ends = np.asarray(ends, np.int64).ravel()
+        if not (ends.size and 1 <= ends.min() and ends.max() <= len(p)):
+            raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
+        self.points, self.ends, self.lattice, self.offsets = p, ends, lattice, offsets
+        p = p[: ends.max()]
+        low = np.array([c.min() for c in p.T])
+        extent = float(max(c.max() - c.min() for c in p.T)) + 2 * _HALF
+        if scales is None:
+            scales = default_scales(extent)
+        # A sweep measures every cluster at the same scales: checked and planned once.
+        self.scales, plan = _plan(np.asarray(scales, np.float64).ravel().tobytes(), offsets, p.shape[1])
+        self.counts = np.ones((len(ends), len(self.scales)), np.int64)
+        integer = p.dtype.kind == "i"
+        compiled = not integer or extent < 2**31
+        if integer and compiled:  # from the low corner, exactly: each prefix is shifted again to its own
             p = (p - low).astype(np.int32)
-        done = _prefix_counts(p, ends, integer, 0.0 if lattice else _HALF, *plan,
-                              _BITMAP_CAP, _STRIP_WORDS_PER_SITE, counts)
-    for c in np.flatnonzero(~done):
-        counts[c] = box_counts(p[: ends[c]], lattice, scales, offsets)[1]
-    return scales.copy(), counts
+        # Beyond int32, no prefix is given to the compiled code (``finish`` counts them all).
+        self.args = (p, ends if compiled else ends[:0], integer, 0.0 if lattice else _HALF, *plan, _BITMAP_CAP,
+                     _STRIP_WORDS_PER_SITE, self.counts)
+
+    def finish(self, done):
+        """Count with ``box_counts`` the prefixes that ``_prefix_counts`` left (``done`` False, or not given)."""
+        for c in np.r_[np.flatnonzero(~done), len(done):len(self.ends)]:
+            self.counts[c] = box_counts(self.points[: self.ends[c]], self.lattice, self.scales, self.offsets)[1]
 
 
 @functools.lru_cache(maxsize=32)
@@ -584,6 +630,23 @@ def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, pare
         done[c] = _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift,
                                 cap, strip_words, counts[c])
     return done
+
+
+@jit
+def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, points, box_ends, integer, box_radius,
+                      sides, own, n_own, order, parent, part, shift, cap, strip_words, counts):
+    """``cluster_measures``' figures, into the arrays given; returns ``_prefix_counts``'s ``done``."""
+    gyration = _prefix_gyration(positions)
+    distances = _distances(positions)
+    for c in range(1, len(distances)):
+        distances[c] = max(distances[c], distances[c - 1])
+    for c in range(len(ends)):
+        rg[c], radius[c] = gyration[ends[c] - 1], distances[ends[c] - 1]
+    for c in range(len(history)):
+        rg_history[c] = gyration[history[c] - 1] if history[c] <= len(gyration) else np.nan
+    shape[:] = _anisotropy(positions, ends)
+    return _prefix_counts(points, box_ends, integer, box_radius, sides, own, n_own, order, parent, part, shift, cap,
+                          strip_words, counts)
 
 
 @jit
@@ -795,20 +858,3 @@ def _anisotropy(points, counts):
             if outer:
                 out[c] = (total / outer - isotropic) / (1 - isotropic)
     return out
-
-
-def mass_within(points, radii) -> np.ndarray:
-    """N(r): number of particles whose centre lies within r of the seed (first point).
-
-    Parameters
-    ----------
-    points : array_like, (n, dim)
-    radii : array_like
-        Radii r; the seed itself is counted for every r >= 0.
-
-    Returns
-    -------
-    ndarray of int64, shaped like ``radii``
-    """
-    distances = np.sort(_seed_distances(points))
-    return np.searchsorted(distances, np.asarray(radii, dtype=np.float64), side="right").astype(np.int64)

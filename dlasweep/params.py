@@ -7,9 +7,11 @@ raises ``ValueError`` naming the offending parameter.
 
 from __future__ import annotations
 
+import math
 import numbers
-from decimal import Decimal, InvalidOperation
+from collections.abc import Callable
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
 
 MODELS = ("lattice", "offlattice")
 SEED_SHAPES = ("point", "block", "line")
@@ -18,58 +20,139 @@ STATUSES = ("ok", "boundary", "step_limit", "exhausted", "error")
 """Growth outcomes; the index is the integer code kernels return."""
 
 
+def is_integer(value) -> bool:
+    """Whether ``value`` is an integer and not a bool (``True`` is an ``int`` to Python, not to a user)."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def is_number(value) -> bool:
+    """Whether ``value`` is a real number and not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
 class Parameter:
-    """One model parameter as a user reads it.
+    """One model parameter as a user reads it: the one place it is spelled.
 
     Attributes
     ----------
+    kind : type
+        ``bool``, ``int``, ``float`` or ``str``: what ``resolve`` converts
+        to and ``coerce`` parses a command-line string as.
     default
         The value ``resolve`` fills in.
     values : tuple or str
         The allowed values: every one (tuple), or their range as a user
-        writes it (str). ``resolve`` is what enforces them.
+        writes it (str). ``checks`` (and for strings, the tuple) is what
+        enforces them.
     meaning : str
-        One line, a noun phrase: ``grow --help`` and the netCDF
-        ``long_name`` both use it.
+        One line, a noun phrase: ``grow --help``, the netCDF ``long_name``
+        and the README's table use it.
+    checks : tuple of callable
+        Each ``check(value, p, given)`` returns what is wrong with a value
+        (``resolve`` prefixes the parameter's name), or None, given ``p``
+        (every parameter, typed) and ``given`` (what the caller set).
+    units : str or None
+        The netCDF ``units`` of its variable; None for strings.
     shown : str, optional
         The default as a user reads it, where ``default`` is a placeholder
-        that ``resolve`` replaces.
+        that ``fill`` replaces.
+    fill : callable, optional
+        ``fill(value, p)``: the value made explicit (a placeholder default
+        replaced), before the checks.
+    note : str
+        More for the README's table, beyond ``meaning``.
     """
 
+    kind: type
     default: object
     values: tuple | str
     meaning: str
+    checks: tuple = ()
+    units: str | None = "1"
     shown: str | None = None
+    fill: Callable | None = None
+    note: str = ""
+
+
+MIN_SIZE = 8
+"""Smallest box side to grow in."""
+
+
+def _below(low, shown, why=""):
+    """A check: a value below ``low`` (written ``shown``) is refused, with ``why``."""
+    return lambda v, p, given: f"{v} is below {shown}{why}" if v < low else None
+
+
+def _negative(v, p, given):
+    return f"{v} is negative" if v < 0 else None
+
+
+def _neighbourhood(nb, p):
+    """``neighbours`` made explicit: 0 stands for the nearest neighbours, 2*dim."""
+    return 2 * p["dim"] if nb == 0 else nb
 
 
 PARAMETERS = {
-    "model": Parameter("lattice", MODELS, "particle positions: square/cubic lattice sites, or unit-diameter "
-                                          "disks/spheres in continuous space"),
-    "dim": Parameter(2, (2, 3), "dimension of space"),
-    "stickiness": Parameter(1.0, "(0, 1]", "probability to stick at each contact"),
-    "neighbours": Parameter(0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours",
-                            shown="2*dim"),
-    "seed_shape": Parameter("point", SEED_SHAPES, "seed: one particle, a 2**dim block, or a substrate (line "
-                                                  "in 2D, plane in 3D; periodic sides of width size)"),
-    "size": Parameter(0, "0 or an integer >= 8", "box side in lattice spacings (particle diameters off the "
-                                                 "lattice), 0 = unbounded"),
-    "launch": Parameter("circle", LAUNCHES, "release on a circle/sphere of radius launch_factor*r_max + "
-                                            "launch_margin, or uniformly on the box surface (needs size > 0)"),
-    "launch_factor": Parameter(1.0, ">= 1", "launch radius over the cluster's largest radius r_max"),
-    "launch_margin": Parameter(2.0, ">= 1", "launch radius beyond launch_factor*r_max"),
-    "kill_factor": Parameter(0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the "
-                                              "launch circle, none killed"),
-    "jumps": Parameter(True, "true or false", "exact first-passage jumps far from the cluster (true), or "
-                                              "single steps everywhere (false)"),
-    "step": Parameter(0.0, "0 or > 0", "off-lattice step: 0 = move to exact contact, > 0 = standard deviation "
-                                       "of fixed Gaussian steps with overlap checks (can tunnel)"),
-    "walkers": Parameter(1, "an integer >= 1", "walkers at once; more than 1 start uniformly in the box and "
-                                               "move in lockstep, none relaunched"),
-    "max_steps": Parameter(0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
-                                                 "status step_limit when it runs out"),
+    "model": Parameter(str, "lattice", MODELS, "particle positions: square/cubic lattice sites, or unit-diameter "
+                                               "disks/spheres in continuous space", units=None),
+    "dim": Parameter(int, 2, (2, 3), "dimension of space",
+                     checks=(lambda d, p, given: None if d in (2, 3) else f"{d} is not 2 or 3",)),
+    "stickiness": Parameter(float, 1.0, "(0, 1]", "probability to stick at each contact",
+                            checks=(lambda s, p, given: None if 0.0 < s <= 1.0 else f"{s} is not in (0, 1]",)),
+    "neighbours": Parameter(
+        int, 0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours", shown="2*dim",
+        fill=_neighbourhood,
+        checks=(lambda nb, p, given: None if nb in (2 * p["dim"], 3 ** p["dim"] - 1)
+                else f"{nb} is not {2 * p['dim']} or {3 ** p['dim'] - 1} for dim={p['dim']}",
+                lambda nb, p, given: "only lattice models have a neighbourhood"
+                if p["model"] == "offlattice" and "neighbours" in given and nb != 2 * p["dim"] else None)),
+    "seed_shape": Parameter(
+        str, "point", SEED_SHAPES, "seed: one particle, a 2**dim block, or a substrate (line in 2D, plane in 3D; "
+                                   "periodic sides of width size)", units=None,
+        note="the substrate is not counted in the points",
+        checks=(lambda v, p, given: "'line' needs size > 0 (the substrate's periodic width)"
+                if v == "line" and p["size"] == 0 else None,)),
+    "size": Parameter(int, 0, f"0 or an integer >= {MIN_SIZE}", "box side in lattice spacings (particle diameters "
+                                                                "off the lattice), 0 = unbounded",
+                      checks=(_negative, lambda v, p, given: f"{v} is below {MIN_SIZE}, too small to grow in"
+                              if 0 < v < MIN_SIZE else None)),
+    "launch": Parameter(str, "circle", LAUNCHES, "release on a circle/sphere of radius launch_factor*r_max + "
+                                                 "launch_margin, or uniformly on the box surface (needs size > 0)",
+                        units=None,
+                        checks=(lambda v, p, given: "'box' needs size > 0" if v == "box" and p["size"] == 0
+                                else None,)),
+    "launch_factor": Parameter(float, 1.0, ">= 1", "launch radius over the cluster's largest radius r_max",
+                               checks=(_below(1.0, "1", " (the launch circle must enclose the cluster)"),)),
+    "launch_margin": Parameter(float, 2.0, ">= 1", "launch radius beyond launch_factor*r_max",
+                               checks=(_below(1.0, "1"),)),
+    "kill_factor": Parameter(
+        float, 0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the launch circle, none "
+                                "killed",
+        note="the exact return draws from the Poisson kernel (2D) or escapes with probability 1-R/r (3D); > 1: "
+             "killed and relaunched beyond kill_factor * launch radius",
+        checks=(lambda kf, p, given: f"{kf} must be 0 (exact return) or > 1" if kf != 0.0 and kf <= 1.0 else None,
+                lambda kf, p, given: "a kill circle needs launch='circle' (box launches start outside it)"
+                if kf != 0.0 and p["launch"] == "box" else None)),
+    "jumps": Parameter(bool, True, "true or false", "exact first-passage jumps far from the cluster (true), or "
+                                                    "single steps everywhere (false)"),
+    "step": Parameter(float, 0.0, "0 or > 0", "off-lattice step: 0 = move to exact contact, > 0 = standard "
+                                              "deviation of fixed Gaussian steps with overlap checks (can tunnel)",
+                      checks=(_negative, lambda st, p, given: "a step length applies only to model='offlattice'"
+                              if st > 0.0 and p["model"] == "lattice" else None)),
+    "walkers": Parameter(int, 1, "an integer >= 1", "walkers at once; more than 1 start uniformly in the box and "
+                                                    "move in lockstep, none relaunched",
+                         note="lockstep walkers take single steps",
+                         checks=(_below(1, "1"), lambda w, p, given: "more than one walker needs size > 0 (they "
+                                 "start uniformly in the box)" if w > 1 and p["size"] == 0 else None)),
+    "max_steps": Parameter(int, 0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
+                                                      "status step_limit when it runs out", checks=(_negative,)),
 }
-"""Every model parameter a cluster depends on (README, "The model")."""
+"""Every model parameter a cluster depends on (README, "The model"), once: its type,
+default, allowed values, checks, meaning and units. ``resolve``, ``coerce``, the
+command line's options and help (``cli``), the spec's checks (``spec``, through
+``resolve``), the dataset's attributes (``store.SCHEMA``) and the README's table
+(``markdown_table``, checked by a test) derive from it."""
 
 DEFAULTS = {name: p.default for name, p in PARAMETERS.items()}
 """Model parameters and their defaults, as ``resolve`` fills them in."""
@@ -81,14 +164,14 @@ def _kind(name, value, kind):
             return value
         raise ValueError(f"{name}: expected true or false, got {value!r}")
     if kind is int:
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        if not is_integer(value):
             raise ValueError(f"{name}: expected an integer, got {value!r}")
         return int(value)
     if kind is float:
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        if not is_number(value):
             raise ValueError(f"{name}: expected a number, got {value!r}")
         value = float(value)
-        if value != value or value in (float("inf"), float("-inf")):
+        if not math.isfinite(value):
             raise ValueError(f"{name}: expected a finite number, got {value!r}")
         return value
     if not isinstance(value, str):
@@ -103,7 +186,11 @@ def _choice(name, value, choices):
 
 
 def resolve(**params) -> dict:
-    """Validate model parameters and fill in defaults.
+    """Validate model parameters and fill in defaults, from ``PARAMETERS``.
+
+    Every value is first converted to its parameter's type (and a string
+    checked against its choices), then each parameter is made explicit
+    (``fill``) and checked (``checks``), in the table's order.
 
     Parameters
     ----------
@@ -124,60 +211,45 @@ def resolve(**params) -> dict:
     if unknown:
         raise ValueError(f"{unknown[0]}: unknown model parameter (known: {', '.join(DEFAULTS)})")
     p = {**DEFAULTS, **params}
-    p["model"] = _choice("model", _kind("model", p["model"], str), MODELS)
-    dim = p["dim"] = _kind("dim", p["dim"], int)
-    if dim not in (2, 3):
-        raise ValueError(f"dim: {dim} is not 2 or 3")
-    s = p["stickiness"] = _kind("stickiness", p["stickiness"], float)
-    if not 0.0 < s <= 1.0:
-        raise ValueError(f"stickiness: {s} is not in (0, 1]")
-    nb = _kind("neighbours", p["neighbours"], int)
-    if nb == 0:
-        nb = 2 * dim
-    if nb not in (2 * dim, 3**dim - 1):
-        raise ValueError(f"neighbours: {nb} is not {2 * dim} or {3**dim - 1} for dim={dim}")
-    if p["model"] == "offlattice" and "neighbours" in params and nb != 2 * dim:
-        raise ValueError("neighbours: only lattice models have a neighbourhood")
-    p["neighbours"] = nb
-    p["seed_shape"] = _choice("seed_shape", _kind("seed_shape", p["seed_shape"], str), SEED_SHAPES)
-    size = p["size"] = _kind("size", p["size"], int)
-    if size < 0:
-        raise ValueError(f"size: {size} is negative")
-    p["launch"] = _choice("launch", _kind("launch", p["launch"], str), LAUNCHES)
-    if p["launch"] == "box" and size == 0:
-        raise ValueError("launch: 'box' needs size > 0")
-    if p["seed_shape"] == "line" and size == 0:
-        raise ValueError("seed_shape: 'line' needs size > 0 (the substrate's periodic width)")
-    lf = p["launch_factor"] = _kind("launch_factor", p["launch_factor"], float)
-    if lf < 1.0:
-        raise ValueError(f"launch_factor: {lf} is below 1 (the launch circle must enclose the cluster)")
-    lm = p["launch_margin"] = _kind("launch_margin", p["launch_margin"], float)
-    if lm < 1.0:
-        raise ValueError(f"launch_margin: {lm} is below 1")
-    kf = p["kill_factor"] = _kind("kill_factor", p["kill_factor"], float)
-    if kf != 0.0 and kf <= 1.0:
-        raise ValueError(f"kill_factor: {kf} must be 0 (exact return) or > 1")
-    if kf != 0.0 and p["launch"] == "box":
-        raise ValueError("kill_factor: a kill circle needs launch='circle' (box launches start outside it)")
-    p["jumps"] = _kind("jumps", p["jumps"], bool)
-    st = p["step"] = _kind("step", p["step"], float)
-    if st < 0.0:
-        raise ValueError(f"step: {st} is negative")
-    if st > 0.0 and p["model"] == "lattice":
-        raise ValueError("step: a step length applies only to model='offlattice'")
-    w = p["walkers"] = _kind("walkers", p["walkers"], int)
-    if w < 1:
-        raise ValueError(f"walkers: {w} is below 1")
-    if w > 1 and size == 0:
-        raise ValueError("walkers: more than one walker needs size > 0 (they start uniformly in the box)")
-    if size > 0:
-        minimum = 8
-        if size < minimum:
-            raise ValueError(f"size: {size} is below {minimum}, too small to grow in")
-    ms = p["max_steps"] = _kind("max_steps", p["max_steps"], int)
-    if ms < 0:
-        raise ValueError(f"max_steps: {ms} is negative")
+    for name, par in PARAMETERS.items():
+        p[name] = _kind(name, p[name], par.kind)
+        if par.kind is str:
+            _choice(name, p[name], par.values)
+    for name, par in PARAMETERS.items():
+        if par.fill is not None:
+            p[name] = par.fill(p[name], p)
+        for check in par.checks:
+            problem = check(p[name], p, params)
+            if problem:
+                raise ValueError(f"{name}: {problem}")
     return p
+
+
+def text(value) -> str:
+    """A value (numpy scalars too) as a user writes it on the command line or in a spec: ``true``, not ``True``."""
+    value = value.item() if hasattr(value, "item") else value
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def allowed(name) -> str:
+    """The allowed values of a parameter as a user reads them: ``lattice, offlattice`` or ``(0, 1]``."""
+    values = PARAMETERS[name].values
+    return ", ".join(map(text, values)) if isinstance(values, tuple) else values
+
+
+def shown_default(name) -> str:
+    """The default of a parameter as a user reads it (``2*dim`` for the neighbourhood)."""
+    par = PARAMETERS[name]
+    return par.shown or text(par.default)
+
+
+def markdown_table() -> str:
+    """The README's table of the model parameters (section "The model"), from ``PARAMETERS``."""
+    lines = ["| name | default | values | meaning |", "|---|---|---|---|"]
+    for name, par in PARAMETERS.items():
+        meaning = f"{par.meaning}; {par.note}" if par.note else par.meaning
+        lines.append(f"| {name} | {shown_default(name)} | {allowed(name)} | {meaning} |")
+    return "\n".join(lines) + "\n"
 
 
 def coerce(name: str, text: str):
@@ -188,20 +260,20 @@ def coerce(name: str, text: str):
     """
     if name not in DEFAULTS:
         raise ValueError(f"{name}: unknown model parameter (known: {', '.join(DEFAULTS)})")
-    default = DEFAULTS[name]
-    if isinstance(default, bool):
+    kind = PARAMETERS[name].kind
+    if kind is bool:
         low = text.strip().lower()
         if low in ("true", "1", "yes"):
             return True
         if low in ("false", "0", "no"):
             return False
         raise ValueError(f"{name}: expected true or false, got {text!r}")
-    if isinstance(default, int):
+    if kind is int:
         try:
             return integer(text)
         except ValueError as err:
             raise ValueError(f"{name}: {err}") from None
-    if isinstance(default, float):
+    if kind is float:
         try:
             return float(text)
         except ValueError:

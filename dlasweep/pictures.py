@@ -262,7 +262,7 @@ def describe(params, n, seed=None, status="ok"):
     head = f"{p['model']} DLA in {p['dim']}D, N = {n}" + ("" if seed is None else f", seed {seed}")
     if status != "ok":
         head += f", stopped: {status}"
-    changed = [f"{name}={str(p[name]).lower() if isinstance(p[name], bool) else p[name]}"
+    changed = [f"{name}={_params.text(p[name])}"
                for name in _params.PARAMETERS if p[name] != usual[name]]
     return head, changed
 

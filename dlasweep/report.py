@@ -2,7 +2,8 @@
 
 Draws and writes what ``analysis.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
-Rg, costs); it computes nothing else. Writes ``summary.csv``,
+Rg, costs), read through ``analysis.Readout`` (rows, labels, the exact
+reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
 ``summary.md``, PNG plots and ``report.md`` into one folder. Plots the
 dataset has no data for are skipped, never drawn empty.
 """
@@ -15,11 +16,20 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import EXACT_METHOD, config_dims, exact_reference, method_axes, summarise
+from .analysis import (
+    EXACT_METHOD,
+    Readout,
+    bias,
+    cluster_radius,
+    error_bars,
+    fitted_line,
+    fitted_scales,
+    plain,
+    resolved,
+    visible_scales,
+)
+from .fit import MIN_DECADES, START_FRACTION
 from .pictures import draw_points
-
-REFERENCE_D = {2: 1.7100, 3: 2.50}
-"""D of DLA: 2D off-lattice 1.7100(3) (Menshutin et al. 2008); 3D about 2.50."""
 
 FAILURE_AXES = ("kill_factor", "step", "size", "stickiness")
 """Parameters whose extremes are expected to break the model or the measurement."""
@@ -61,7 +71,7 @@ def report(ds, outdir, progress=None) -> list:
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     tell()
-    sweep = _Sweep(ds)
+    sweep = Readout(ds)
     tell()
     written = [_write_csv(sweep, out / "summary.csv"), _write_table(sweep, out / "summary.md")]
     figures = {}
@@ -77,88 +87,19 @@ def report(ds, outdir, progress=None) -> list:
     return written
 
 
-class _Sweep:
-    """The dataset, its summary, and names for its configurations."""
-
-    def __init__(self, ds):
-        self.ds = ds
-        self.s = summarise(ds)
-        self.config_dims = config_dims(ds)
-        self.params = [d for d in self.config_dims if d != "size"]
-        self.counts = ds["n_particles"].values
-        self.status_names = list(self.s["status"].values)
-        self.dim = int(ds["dim"].max()) if "dim" in ds else 2
-        self.lattice = bool((ds["model"] == "lattice").all()) if "model" in ds else True
-        self.configs = list(np.ndindex(*(ds.sizes[d] for d in self.config_dims)))
-        # Lattice clusters cross over to axis-aligned growth: the off-lattice value is not theirs.
-        self.reference = None if self.lattice else REFERENCE_D.get(self.dim)
-        self.methods = method_axes(ds)
-        self._rows = {}
-
-    def at(self, name, config, **index):
-        """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
-        return self.s[name][{**dict(zip(self.config_dims, config)), **index}].values
-
-    def row(self, config, k) -> dict:
-        """One line of the summary table (built once)."""
-        if (config, k) not in self._rows:
-            self._rows[config, k] = self._row(config, k)
-        return self._rows[config, k]
-
-    def _row(self, config, k) -> dict:
-        row = {name: _plain(self.ds[name].values[i]) for name, i in zip(self.config_dims, config)}
-        tally = self.at("status_count", config, n_particles=k)
-        row.update(n_particles=int(self.counts[k]), seeds=int(tally.sum()),
-                   status=" ".join(f"{n}:{t}" for n, t in zip(self.status_names, tally) if t),
-                   flagged=bool(tally[1:].any()))
-        for name in (*(n for n, v in self.s.data_vars.items() if v.dims[-1:] == ("n_particles",)), "D_reason"):
-            row[name] = _plain(self.at(name, config, n_particles=k))
-        for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_reason"):
-            row[name] = _plain(self.at(name, config)) if k == len(self.counts) - 1 else ""
-        return row
-
-    def rows(self):
-        return [self.row(c, k) for c in self.configs for k in range(len(self.counts))]
-
-    def label(self, config, dims=None) -> str:
-        """``name=value`` for the swept parameters and the box size of a configuration."""
-        parts = []
-        for name, i in zip(self.config_dims, config):
-            if dims is not None and name not in dims:
-                continue
-            value = self.ds[name].values[i]
-            if name == "size":
-                if self.ds.sizes["size"] > 1 or value:
-                    parts.append("unbounded" if value == 0 else f"L={value}")
-            else:
-                parts.append(f"{name}={_plain(value)}")
-        return ", ".join(parts) or "all clusters"
-
-    def cluster_of(self, config, seed):
-        """Position on ``cluster`` of a configuration's cluster, or None when it is not stored."""
-        index = int(self.at("cluster_index", config, seed=seed))
-        return None if index < 0 else index
-
-
 def _cluster_points(ds, i):
     from .store import cluster_points  # here, so `import dlasweep` skips xarray until a sweep is read
 
     return cluster_points(ds, i)
 
 
-def _stored(ds) -> str:
+def _stored(sweep) -> str:
     """How many clusters keep their positions, and what the report draws from them."""
-    stored = ds.sizes.get("cluster", 0)
-    if stored == 0:
+    if sweep.n_stored == 0:
         return "none stored with its positions (no gallery, no diffusion times; every curve is measured)"
-    if stored < ds["n_grown"].size // ds.sizes["n_particles"]:
-        return f"{stored} stored with their positions (the gallery and the diffusion times are of those)"
+    if sweep.n_stored < sweep.n_clusters:
+        return f"{sweep.n_stored} stored with their positions (the gallery and the diffusion times are of those)"
     return "every one stored with its positions"
-
-
-def _plain(value):
-    value = value.item() if hasattr(value, "item") else value
-    return value.decode() if isinstance(value, bytes) else value
 
 
 # Tables -------------------------------------------------------------------
@@ -270,8 +211,7 @@ def _gallery(sweep, path):
     last = len(sweep.counts) - 1
     for ax, config in zip(axes, shown):
         points = _cluster_points(sweep.ds, sweep.cluster_of(config, 0))
-        status = sweep.status_names[int(sweep.ds["status"][{**dict(zip(sweep.config_dims, config)),
-                                                             "n_particles": last, "seed": 0}])]
+        status = sweep.status_of(config, last, 0)
         ax.set_title(f"{sweep.label(config)}\nN={len(points)}, {status}", fontsize=8)
         if len(points):
             draw_points(ax, points.astype(float), sweep.lattice, 3.0)
@@ -287,12 +227,11 @@ def _gallery(sweep, path):
 
 def _box_counts(sweep, path):
     scales = sweep.ds["scale"].values
-    box = sweep.ds["box_count"].values
     last = len(sweep.counts) - 1
     shown = sweep.configs[:_MAX_PANELS]
     fig, axes = _figure(len(shown))
     # Past the largest cluster every count is 1: nothing to see there.
-    visible = scales <= 2 * scales[min(np.argmax(box.max(axis=tuple(range(box.ndim - 1))) <= 1), len(scales) - 1)]
+    visible = visible_scales(scales, sweep.ds["box_count"].values)
     for ax, config in zip(axes, shown):
         where = {**dict(zip(sweep.config_dims, config)), "n_particles": last}
         curves = sweep.ds["box_count"][where].values
@@ -306,8 +245,7 @@ def _box_counts(sweep, path):
             ok = bool(sweep.at("D_box_cluster_ok", config, n_particles=last, seed=0))
             span = (scales >= lo) & (scales <= hi)
             x = scales[span]
-            anchor = np.exp(np.mean(np.log(curves[0][span]) + D * np.log(x)))
-            ax.loglog(x, anchor * x ** -D, color="C3" if ok else "C1", lw=1.5,
+            ax.loglog(x, fitted_line(x, curves[0][span], -D), color="C3" if ok else "C1", lw=1.5,
                       label=f"seed 0: D={D:.3f}" + ("" if ok else " (not flat)"))
             ax.axvspan(lo, hi, color="C2", alpha=0.1, lw=0)
         ax.set_title(sweep.label(config), fontsize=8)
@@ -326,10 +264,7 @@ def _local_slopes(sweep, path):
     if slope.shape[-1] == 0 or not np.isfinite(slope).any():
         return None
     mid = sweep.s["scale_mid"].values
-    fitted = sweep.s["D_box_range_hi"].isel(n_particles=-1).values
-    # Beyond the fitted windows the counts saturate and the slope is noise.
-    top = np.nanmax(fitted) if np.isfinite(fitted).any() else mid[-1]
-    keep = (mid >= 1.5) & (mid <= top)
+    keep = fitted_scales(sweep.s)
     fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
         mean, spread = sweep.at("box_slope", config)[keep], sweep.at("box_slope_std", config)[keep]
@@ -361,9 +296,7 @@ def _dimension_vs_n(sweep, path):
                             color="C0", alpha=0.15, lw=0, label="local slope D_eff(n), 95% band")
             ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8)
         for e, (name, title) in enumerate(ESTIMATORS):
-            mean = sweep.at(name, config)
-            err = [np.nan_to_num(mean - sweep.at(f"{name}_ci_lo", config)),
-                   np.nan_to_num(sweep.at(f"{name}_ci_hi", config) - mean)]
+            mean, err = sweep.bars(name, config)
             ax.errorbar(sweep.counts * (1.06 if e else 1.0), mean, yerr=err, color=f"C{3 * e}", marker="os"[e],
                         mfc="none" if e else f"C{3 * e}", ls="none", capsize=2, label=title)
         for n, d, seeds in zip(sweep.counts, sweep.at("D", config), sweep.at("D_seeds", config)):
@@ -401,8 +334,7 @@ def _mass_radius(sweep, path):
         D, lo, hi = (float(sweep.at(name, config, n_particles=last)) for name in ("D", "D_range_lo", "D_range_hi"))
         if np.isfinite(D):
             window = (history >= lo) & (history <= hi)
-            anchor = np.exp(np.mean(np.log(history[window]) - D * np.log(rg[window])))
-            ax.loglog(rg[window], anchor * rg[window] ** D, color="C3", lw=1.5,
+            ax.loglog(rg[window], fitted_line(rg[window], history[window], D), color="C3", lw=1.5,
                       label=f"N ~ <Rg>^{D:.3f}, fitted window")
             ax.axhspan(lo, hi, color="C3", alpha=0.08, lw=0)
         ax.minorticks_off()
@@ -421,9 +353,7 @@ def _anisotropy(sweep, path):
         return None
     fig, (ax,) = _figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
-        mean = sweep.at("anisotropy", config)
-        err = [np.nan_to_num(mean - sweep.at("anisotropy_ci_lo", config)),
-               np.nan_to_num(sweep.at("anisotropy_ci_hi", config) - mean)]
+        mean, err = sweep.bars("anisotropy", config)
         ax.errorbar(sweep.counts * 1.02 ** c, mean, yerr=err, color=_colour(c), marker="o", capsize=2,
                     label=sweep.label(config))
     ax.axhline(0, color="k", lw=0.8)
@@ -496,44 +426,29 @@ def _diffusion_times(sweep, path):
             "stuck, as a fraction of the cluster's radius (right).")
 
 
-_SHORTCUTS = {"kill_factor": "kill circle", "jumps": "single steps", "step": "Gaussian steps", "size": "finite box"}
-"""The name of the shortcut each method axis takes away from the exact method."""
 _MARKERS = "*osD^vP<>Xph"
 _FILLS = ("full", "none", "left", "bottom")
-
-
-def _family(sweep, config, methods) -> str:
-    """The shortcuts a configuration takes, e.g. ``kill circle + single steps``; ``exact`` for none."""
-    taken = [_SHORTCUTS[m] for m in methods
-             if _plain(sweep.ds[m].values[config[sweep.config_dims.index(m)]]) != EXACT_METHOD[m]]
-    return " + ".join(taken) or "exact"
-
-
-def _variant(sweep, config, methods) -> str:
-    """The non-exact method values of a configuration, e.g. ``kill_factor=1.2, step=2.0``."""
-    shown = [m for m in methods if _plain(sweep.ds[m].values[config[sweep.config_dims.index(m)]]) != EXACT_METHOD[m]]
-    return sweep.label(config, shown) if shown else "exact"
 
 
 def _speed_accuracy(sweep, path):
     methods = sweep.methods
     last = len(sweep.counts) - 1
-    pairs = [(c, exact_reference(sweep.ds, c)) for c in sweep.configs]
+    pairs = [(c, sweep.exact(c)) for c in sweep.configs]
     pairs = [(c, r) for c, r in pairs if r is not None]
     if not methods or all(c == r for c, r in pairs):
         return None
     others = [d for d in sweep.config_dims if d not in methods and sweep.ds.sizes[d] > 1]
-    families = list(dict.fromkeys(["exact", *(_family(sweep, c, methods) for c, _ in pairs)]))
+    families = list(dict.fromkeys(["exact", *(sweep.family(c) for c, _ in pairs)]))
     members = {}
     fig, (dev_d, dev_rg) = _figure(2, 5.0, 4.4)
     for config, ref in pairs:
         row = sweep.row(config, last)
-        family = _family(sweep, config, methods)
+        family = sweep.family(config)
         f = families.index(family)
         # Variants of one family share colour and marker and differ in fill.
         fill = _FILLS[members.setdefault(family, []).__len__() % len(_FILLS)]
         members[family].append(config)
-        label = _variant(sweep, config, methods) + (f" ({sweep.label(config, others)})" if others else "")
+        label = sweep.variant(config) + (f" ({sweep.label(config, others)})" if others else "")
         style = dict(color=_colour(f), marker=_MARKERS[f % len(_MARKERS)], ms=10 if f == 0 else 6, capsize=2,
                      ls="none", fillstyle=fill, mec="k" if row["pareto"] else _colour(f))
         for ax, name in ((dev_d, "D"), (dev_rg, "rg_mean")):
@@ -542,8 +457,7 @@ def _speed_accuracy(sweep, path):
                 ax.errorbar(row["seconds_per_particle"], y, yerr=np.nan_to_num(err), label=label, **style)
             else:
                 _mark_missing(ax, [row["seconds_per_particle"]], [y])
-    front = [row for row in (sweep.row(c, last) for c, _ in pairs) if row["pareto"]]
-    front.sort(key=lambda r: r["seconds_per_particle"])
+    front = sweep.pareto_front([c for c, _ in pairs], last)
     if len(front) > 1:
         dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
                     color="k", lw=0.8, ls=":", label="Pareto front (cheapest for its accuracy)")
@@ -569,7 +483,7 @@ def _verdict(value, half) -> str:
     if not np.isfinite(value):
         return "-"
     text = f"{value:+.4f} ± {half:.4f}"
-    return text + (" (resolved)" if abs(value) > half else f" (|dev| < {abs(value) + half:.4f})")
+    return text + (" (resolved)" if resolved(value, half) else f" (|dev| < {abs(value) + half:.4f})")
 
 
 def _deviation_table(sweep) -> list:
@@ -585,7 +499,7 @@ def _deviation_table(sweep) -> list:
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
                                 "Rg/Rmax - exact"]) + " |", "|" + "---|" * (len(sweep.config_dims) + 3)]
     for config, r in zip(sweep.configs, rows):
-        exact = exact_reference(sweep.ds, config) == config
+        exact = sweep.exact(config) == config
         cells = [str(r[d]) for d in sweep.config_dims] + [
             "exact (reference)" if exact else _verdict(r[f"{name}_vs_exact"], r[f"{name}_vs_exact_half_width"])
             for name in ("D", "rg_mean", "rg_over_rmax")]
@@ -599,23 +513,20 @@ def _failure(sweep, path):
         return None
     last = len(sweep.counts) - 1
     fig, panels = _figure(2 * len(axes_present), 4.0, 3.3)
-    base = exact_reference(sweep.ds, sweep.configs[0]) or sweep.configs[0]
+    base = sweep.exact(sweep.configs[0]) or sweep.configs[0]
     for p, axis in enumerate(axes_present):
-        a = sweep.config_dims.index(axis)
         exact_value = EXACT_METHOD.get(axis)
         # One factor at a time: every other axis at the exact method (or its first value).
-        line = [c for c in sweep.configs if all(c[i] == base[i] for i in range(len(c)) if i != a)]
-        exact = [c for c in line if _plain(sweep.ds[axis].values[c[a]]) == exact_value]
-        varied = [c for c in line if c not in exact]
+        exact, varied = sweep.one_factor(axis, base)
         for panel, name, label in ((panels[2 * p], "D", "D, mass-radius"), (panels[2 * p + 1], "rg_over_rmax",
                                                                              "Rg / R_max")):
             rows = [sweep.row(c, last) for c in varied]
             xs = np.array([float(r[axis]) for r in rows])
             if axis == "size":
-                xs = xs / np.array([max(r["rg_mean"] / r["rg_over_rmax"], 1e-9) for r in rows])
+                xs = xs / np.array([cluster_radius(r) for r in rows])
             y = np.array([r[name] for r in rows])
-            err = [np.nan_to_num(y - [r[f"{name}_ci_lo"] for r in rows]),
-                   np.nan_to_num(np.array([r[f"{name}_ci_hi"] for r in rows]) - y)]
+            err = error_bars(y, np.array([r[f"{name}_ci_lo"] for r in rows]),
+                             np.array([r[f"{name}_ci_hi"] for r in rows]))
             panel.errorbar(xs, y, yerr=err, color="C0", marker="o", capsize=2, ls="-", label=f"{axis} varied")
             _mark_missing(panel, xs, y)
             flagged = np.array([r["flagged"] for r in rows], bool)
@@ -626,10 +537,8 @@ def _failure(sweep, path):
                 panel.axhspan(ref[f"{name}_ci_lo"], ref[f"{name}_ci_hi"], color="0.6", alpha=0.3, lw=0,
                               label=f"exact ({axis}={exact_value}), 95% CI")
                 panel.axhline(ref[name], color="0.4", lw=1)
-                half = (ref[f"{name}_ci_hi"] - ref[f"{name}_ci_lo"]) / 2
                 for x, r in zip(xs, rows):
-                    mine = (r[f"{name}_ci_hi"] - r[f"{name}_ci_lo"]) / 2
-                    units = (r[name] - ref[name]) / np.hypot(half, mine)
+                    units = bias(r, ref, name)
                     if np.isfinite(units):
                         panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4, -9),
                                        textcoords="offset points")
@@ -667,6 +576,11 @@ _PLOTS = {
 
 # The write-up -------------------------------------------------------------
 
+def _decades(n) -> str:
+    """``a decade``, ``1.5 decades``."""
+    return "a decade" if n == 1 else f"{n:g} decades"
+
+
 def _write_report(sweep, figures, path) -> Path:
     ds = sweep.ds
     last = len(sweep.counts) - 1
@@ -676,7 +590,7 @@ def _write_report(sweep, figures, path) -> Path:
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
         "",
-        f"{len(sweep.configs) * ds.sizes['seed']} clusters, {_stored(ds)}; counts "
+        f"{sweep.n_clusters} clusters, {_stored(sweep)}; counts "
         f"{', '.join(map(str, sweep.counts))}; {ds.sizes['seed']} seeds per configuration; root seed "
         f"{ds.attrs.get('root_seed')}; {ds.attrs.get('source', 'dlasweep')}.",
         "",
@@ -704,7 +618,8 @@ def _write_report(sweep, figures, path) -> Path:
         "## How D is measured, and how far to trust it",
         "",
         "- **Mass-radius, ensemble** (the estimator to quote): <Rg>(n) averaged over seeds, from the end of "
-        "the transient (5% of N) to N; the fit takes the widest window of at least a decade whose local slope "
+        f"the transient ({START_FRACTION:.0%} of N) to N; the fit takes the widest window of at least "
+        f"{_decades(MIN_DECADES)} whose local slope "
         "is flat within its own uncertainty. The CI is a bootstrap over seeds with that window fixed; no "
         "cluster is left out for its own fit. A window whose local slope is not flat is marked.",
         "- **Local slope and D_inf**: D_eff(n) over each octave of n with its bootstrap band (figure "
@@ -755,8 +670,8 @@ def plot_bench(ds, outdir) -> Path:
     """
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    model = np.array([str(_plain(v)) for v in ds["model"].values])
-    method = np.array([str(_plain(v)) for v in ds["method"].values])
+    model = np.array([str(plain(v)) for v in ds["model"].values])
+    method = np.array([str(plain(v)) for v in ds["method"].values])
     n, seconds = ds["n"].values.astype(float), ds["seconds"].values.astype(float)
     fig, (ax,) = _figure(1, 6.5, 4.5)
     for c, name in enumerate(dict.fromkeys(model)):

@@ -14,17 +14,17 @@ precision, or ``[run] max_seeds`` are grown (``sweep.run_sweep``).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import itertools
 import json
 import math
-import numbers
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import __version__
 from . import params as _params
+from ._version import __version__
 
 MAX_PARTICLES = 100_000_000
 """Largest particle count a spec may ask for (a guard against typos like 1e12)."""
@@ -136,10 +136,14 @@ class Spec:
     def tasks(self):
         """Yield every ``Task`` in grid (C) order."""
         indices = itertools.product(*(range(n) for n in self.shape[:-1]))
-        for index, config in zip(indices, self.configurations()):
-            params = _params.resolve(**self.fixed, **config)
+        for index, params in zip(indices, self._resolved):
             for j, seed in enumerate(self.seeds):
                 yield Task(index + (j,), params, seed)
+
+    @functools.cached_property
+    def _resolved(self) -> list:
+        """Every configuration's parameters (``params.resolve``), in C order: resolved once per spec."""
+        return [_params.resolve(**self.fixed, **config) for config in self.configurations()]
 
     def stores(self, task: Task) -> bool:
         """Whether the positions of ``task``'s cluster are stored (``[run] store_clusters``)."""
@@ -188,7 +192,7 @@ class Spec:
         Falls back to the spec's value when resolution depends on a sweep
         axis (``neighbours = 0`` with ``dim`` swept).
         """
-        values = {_params.resolve(**self.fixed, **c)[name] for c in self.configurations()}
+        values = {params[name] for params in self._resolved}
         if len(values) == 1:
             return values.pop()
         return self.fixed.get(name, _params.DEFAULTS[name])
@@ -288,8 +292,7 @@ def _precision(grid, run, first_batch):
             raise SpecError("run.max_seeds: applies only with run.target_ci (a fixed sweep grows grid.seeds)")
         return None, None
     target_ci = run["target_ci"]
-    if isinstance(target_ci, bool) or not isinstance(target_ci, numbers.Real) \
-            or not math.isfinite(target_ci) or target_ci <= 0:
+    if not _params.is_number(target_ci) or not math.isfinite(target_ci) or target_ci <= 0:
         raise SpecError(f"run.target_ci: expected a finite number > 0, got {target_ci!r}")
     if isinstance(grid.get("seeds"), list):
         raise SpecError("grid.seeds: with run.target_ci it must be a count (the first batch, "
@@ -304,7 +307,7 @@ def _store_clusters(value):
     """``[run] store_clusters``: "all" (None), "none" (0), or a count K >= 0 of seeds per configuration."""
     if value in ("all", "none"):
         return None if value == "all" else 0
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
+    if not _params.is_integer(value) or value < 0:
         raise SpecError(f'run.store_clusters: expected "all", "none" or an integer >= 0 '
                         f"(the first K seeds of each configuration), got {value!r}")
     return int(value)
@@ -317,7 +320,7 @@ def _reject_unknown(prefix, table, known):
 
 
 def _integer(key, value, low, high):
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+    if not _params.is_integer(value):
         raise SpecError(f"{key}: expected an integer, got {value!r}")
     if value < low or (high is not None and value > high):
         bound = f">= {low}" if high is None else f"in [{low}, {high}]"

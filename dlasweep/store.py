@@ -37,48 +37,116 @@ from __future__ import annotations
 
 import datetime
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import netCDF4
 import numpy as np
 import xarray as xr
 
-from . import __version__
 from . import params as _params
+from ._version import __version__
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
 
 AXES = ("x", "y", "z")
+
+_LENGTH = "lattice spacings (lattice) or particle diameters (offlattice)"
+_CONFIG = "..."
+"""First of a variable's dims in ``SCHEMA``: the swept model parameters, in spec order."""
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One variable of a dataset: its dims, type and attributes.
+
+    Attributes
+    ----------
+    dims : tuple of str
+        ``"..."`` first stands for the swept model parameters (spec order).
+    dtype : numpy dtype or None
+        None where it depends on the data (positions: ``ragged_dtype``).
+    units : str or None
+        None for strings, which have no units.
+    long_name : str
+    """
+
+    dims: tuple
+    dtype: object
+    units: str | None
+    long_name: str
+
+    @property
+    def missing(self):
+        """The value of a not-yet-measured (or failed) entry: NaN for floats, 0 for counts."""
+        return np.nan if np.dtype(self.dtype).kind == "f" else 0
+
+
+_SWEPT = (_CONFIG, "size", "n_particles", "seed")
+SCHEMA = {
+    "box_count": Variable((*_SWEPT, "scale"), np.int64, "1", "number of boxes of side `scale` holding particles"),
+    "n_grown": Variable(_SWEPT, np.int64, "1", "particles attached at this count (less when growth stopped early)"),
+    "status": Variable(_SWEPT, np.int8, "1", "growth outcome at this count"),
+    "radius_gyration": Variable(_SWEPT, np.float64, "1", f"radius of gyration, in {_LENGTH}"),
+    "radius_gyration_history": Variable((_CONFIG, "size", "seed", "history"), np.float64, "1",
+                                        f"radius of gyration of the first `history` particles, in {_LENGTH}"),
+    "max_radius": Variable(_SWEPT, np.float64, "1",
+                           f"largest distance of a particle from the seed particle, in {_LENGTH}"),
+    "anisotropy": Variable(_SWEPT, np.float64, "1",
+                           "cubic anisotropy of the outer half of the mass about the seed: <cos 4 theta> in 2D, "
+                           "the cubic harmonic scaled alike in 3D (1: along the axes, 0: isotropic)"),
+    "walk_steps": Variable(_SWEPT, np.int64, "1", "walk steps (or exact jumps) of every walker until this count"),
+    "wall_time": Variable(_SWEPT, np.float64, "s", "seconds spent growing the cluster to this count"),
+    "D_ci_half_width": Variable((_CONFIG, "size"), np.float64, "1",
+                                "half-width of the 95% bootstrap confidence interval over seeds of the headline "
+                                "(mass-radius) fractal dimension D at the largest particle count"),
+    # coordinates
+    "n_particles": Variable(("n_particles",), np.int64, "1", "target number of particles"),
+    "seed": Variable(("seed",), np.int64, "1",
+                     "replicate number (with root_seed and the grid indices it names the random stream)"),
+    "scale": Variable(("scale",), np.float64, "1", f"box side for box counting, in {_LENGTH}"),
+    "history": Variable(("history",), np.int64, "1", "particle count at which the growth history is recorded"),
+    # the clusters: a CF contiguous ragged array
+    "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster"),
+    "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
+    **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}") for a in AXES},
+    "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
+    # Every model parameter: a sweep axis, else a scalar; strings have no units.
+    **{name: Variable((name,), p.kind, p.units, p.meaning) for name, p in _params.PARAMETERS.items()},
+}
+"""Every variable of a dataset dlasweep writes (a sweep, or one grown cluster): the one place
+its dims, type, units and long name are spelled. ``cluster_<name>`` coordinates take the
+attributes of ``<name>``; the other per-cluster variables of one grown cluster (``status``)
+are on ``cluster`` there."""
+
 SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps",
            "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
-_LENGTH = "lattice spacings (lattice) or particle diameters (offlattice)"
-_DESCRIPTIONS = {
-    "box_count": ("number of boxes of side `scale` holding particles", "1"),
-    "n_grown": ("particles attached at this count (less when growth stopped early)", "1"),
-    "status": ("growth outcome at this count", "1"),
-    "radius_gyration": (f"radius of gyration, in {_LENGTH}", "1"),
-    "radius_gyration_history": (f"radius of gyration of the first `history` particles, in {_LENGTH}", "1"),
-    "history": ("particle count at which the growth history is recorded", "1"),
-    "max_radius": (f"largest distance of a particle from the seed particle, in {_LENGTH}", "1"),
-    "anisotropy": ("cubic anisotropy of the outer half of the mass about the seed: <cos 4 theta> in 2D, "
-                   "the cubic harmonic scaled alike in 3D (1: along the axes, 0: isotropic)", "1"),
-    "wall_time": ("seconds spent growing the cluster to this count", "s"),
-    "walk_steps": ("walk steps (or exact jumps) of every walker until this count", "1"),
-    "n_particles": ("target number of particles", "1"),
-    "seed": ("replicate number (with root_seed and the grid indices it names the random stream)", "1"),
-    "scale": (f"box side for box counting, in {_LENGTH}", "1"),
-    "cluster_particles": ("number of particles of the cluster", "1"),
-    "diffusion_time": ("walk steps (or exact jumps) from release to sticking", "1"),
-    "cluster_seed": ("replicate number of the cluster", "1"),
-    "D_ci_half_width": ("half-width of the 95% bootstrap confidence interval over seeds of the headline "
-                        "(mass-radius) fractal dimension D at the largest particle count", "1"),
-    **{a: (f"{a} coordinate of the particle centre, in {_LENGTH}", "1") for a in AXES},
-    # Strings have no units.
-    **{name: (p.meaning, None if isinstance(p.default, str) else "1") for name, p in _params.PARAMETERS.items()},
+BENCH_SCHEMA = {
+    "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
+    "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
+    "walk_steps": Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
+    "peak_memory": Variable(("run",), np.float64, "MiB", "peak resident memory of the process"),
+    "added_memory": Variable(("run",), np.float64, "MiB", "peak resident memory added by growing the cluster"),
+    "n": Variable(("run",), np.int64, "1", "target particle count"),
+    "model": Variable(("run",), str, None, "model and dimension"),
+    "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
 }
+"""The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
+its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
+
+
+def blank(name, shape) -> np.ndarray:
+    """An array for variable ``name`` of ``SCHEMA``, of its type, every entry missing (``Variable.missing``)."""
+    var = SCHEMA[name]
+    return np.full(shape, var.missing, var.dtype)
+
+
+def dims(name, axes) -> tuple:
+    """The dims of variable ``name`` of ``SCHEMA`` in a sweep whose swept parameters are ``axes``."""
+    return tuple(d for dim in SCHEMA[name].dims for d in (axes if dim == _CONFIG else (dim,)))
 
 
 class StoreError(ValueError):
@@ -112,26 +180,22 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     -------
     xarray.Dataset
     """
-    dims = (*spec.axes, "size", "n_particles", "seed")
     coords = {
         **{name: (name, _coordinate(values)) for name, values in spec.axes.items()},
-        "size": ("size", np.asarray(spec.sizes, np.int64)),
-        "n_particles": ("n_particles", np.asarray(spec.counts, np.int64)),
-        "seed": ("seed", np.asarray(spec.seeds, np.int64)),
-        "scale": ("scale", np.asarray(scales, np.float64)),
-        "history": ("history", np.asarray(history, np.int64)),
+        "size": ("size", np.asarray(spec.sizes, SCHEMA["size"].dtype)),
+        "n_particles": ("n_particles", np.asarray(spec.counts, SCHEMA["n_particles"].dtype)),
+        "seed": ("seed", np.asarray(spec.seeds, SCHEMA["seed"].dtype)),
+        "scale": ("scale", np.asarray(scales, SCHEMA["scale"].dtype)),
+        "history": ("history", np.asarray(history, SCHEMA["history"].dtype)),
     }
-    for name in _params.DEFAULTS:
-        if name not in spec.axes and name != "size":
-            coords[name] = ((), spec.resolved(name))
+    fixed = {name: spec.resolved(name) for name in _params.DEFAULTS if name not in spec.axes and name != "size"}
+    coords.update((name, ((), value)) for name, value in fixed.items())
     tasks = [t for t in spec.tasks() if spec.stores(t)]
     for name in (*spec.axes, "size"):
         coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks]))
-    coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], np.int64))
+    coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], SCHEMA["cluster_seed"].dtype))
 
-    data = {name: ((*dims, "scale") if name == "box_count" else dims, science[name])
-            for name in (*SCIENCE, "wall_time") if name != "radius_gyration_history"}
-    data["radius_gyration_history"] = ((*dims[:-2], "seed", "history"), science["radius_gyration_history"])
+    data = {name: (dims(name, tuple(spec.axes)), science[name]) for name in (*SCIENCE, "wall_time")}
     data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
     attrs = {
         "title": f"dlasweep parameter sweep '{spec.name}': diffusion-limited aggregation clusters",
@@ -308,7 +372,7 @@ def _write_ragged(nc, columns, blocks, total):
         # Never missing, so no fill value (as the counts).
         var = nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB, shuffle=True,
                                 chunksizes=(chunk,), fill_value=False)
-        var.setncatts(_attributes(name, dtype))
+        var.setncatts(attributes(name, dtype))
         variables[name] = var
     written = 0
     for start, block in _blocks(columns, blocks, chunk):
@@ -366,7 +430,7 @@ def open_sweep(path) -> xr.Dataset:
     try:
         ds = xr.open_dataset(path, engine="netcdf4")
     except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...
-        raise StoreError(f"{path}: not a readable netCDF file ({_one_line(err)})") from None
+        raise StoreError(f"{path}: not a readable netCDF file ({one_line(err)})") from None
     missing = [v for v in ("cluster_particles", "x", "y", "diffusion_time") if v not in ds.variables]
     if not str(ds.attrs.get("source", "")).startswith("dlasweep") or missing:
         ds.close()
@@ -378,7 +442,7 @@ def open_sweep(path) -> xr.Dataset:
                 var.load()
     except Exception as err:
         ds.close()
-        raise StoreError(f"{path}: damaged or truncated ({_one_line(err)})") from None
+        raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
     return ds
 
 
@@ -442,20 +506,24 @@ def _describe(ds: xr.Dataset) -> xr.Dataset:
     """Give every variable its long_name and units, flags their meanings, the file its globals."""
     ds["cluster_particles"] = ds["cluster_particles"].astype(np.int32)
     for name, var in ds.variables.items():
-        var.attrs.update(_attributes(name, var.dtype))
+        var.attrs.update(attributes(name, var.dtype))
     ds["cluster_particles"].attrs["sample_dimension"] = "particle"
     ds.attrs = {"Conventions": "CF-1.8", "featureType": "point", "source": f"dlasweep {__version__}",
                 **ds.attrs}
     return ds
 
 
-def _attributes(name, dtype) -> dict:
-    """A variable's ``long_name`` and ``units`` (none for strings), and the meanings of its flags."""
-    key = name if name in _DESCRIPTIONS else name.removeprefix("cluster_")
-    long_name, units = _DESCRIPTIONS[key]
-    if key != name:
-        long_name = f"the cluster's {key}: {long_name}"
-    attrs = {"long_name": long_name, **({"units": units} if units else {})}
+def attributes(name, dtype=None, schema=None) -> dict:
+    """A variable's ``long_name`` and ``units`` (none for strings), and the meanings of its flags.
+
+    From its row of ``schema`` (default ``SCHEMA``); a ``cluster_<name>``
+    coordinate takes ``<name>``'s, as "the cluster's <name>: ...".
+    """
+    schema = SCHEMA if schema is None else schema
+    key = name if name in schema else name.removeprefix("cluster_")
+    var = schema[key]
+    long_name = var.long_name if key == name else f"the cluster's {key}: {var.long_name}"
+    attrs = {"long_name": long_name, **({"units": var.units} if var.units else {})}
     if name == "status":
         attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
     elif dtype == bool:
@@ -467,5 +535,6 @@ def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def _one_line(err) -> str:
+def one_line(err) -> str:
+    """An exception's message on one line (its type's name when it has none): error messages stay one line."""
     return " ".join(str(err).split()) or err.__class__.__name__

@@ -234,15 +234,17 @@ def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
 
     ``stored``: per task, whether its positions are kept (``Spec.stores``).
     """
-    return [measure_task(task, counts, scales, root_seed, keep) for task, keep in zip(tasks, stored)]
+    history = growth_counts(counts)
+    return [measure_task(task, counts, scales, root_seed, keep, history) for task, keep in zip(tasks, stored)]
 
 
-def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
+def measure_task(task, counts, scales, root_seed, stored=True, history=None) -> dict:
     """Grow one cluster and measure every count; runs on a worker.
 
-    Its Rg along the growth is kept at ``growth_counts(counts)``; its
-    positions and diffusion times only when ``stored`` (else empty).
-    Never raises: a failure is returned as an ``error`` result with its message.
+    Its Rg along the growth is kept at ``history`` (default
+    ``growth_counts(counts)``); its positions and diffusion times only when
+    ``stored`` (else empty). Never raises: a failure is returned as an
+    ``error`` result with its message.
     """
     start = time.perf_counter()
     try:
@@ -252,17 +254,12 @@ def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
         points = cluster.points
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
-        lattice = cluster.params["model"] == "lattice"
-        rg = measure.radius_of_gyration(points)
-        history = growth_counts(counts)
+        measures = measure.cluster_measures(points, prefix, growth_counts(counts) if history is None else history,
+                                            lattice=cluster.params["model"] == "lattice", scales=scales)
         return {
-            "box_count": measure.prefix_box_counts(points, prefix, lattice=lattice, scales=scales)[1],
+            **measures,
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
-            "radius_gyration": rg[prefix - 1],
-            "radius_gyration_history": np.where(history <= len(rg), rg[np.minimum(history, len(rg)) - 1], np.nan),
-            "max_radius": measure.max_radius(points)[prefix - 1],
-            "anisotropy": measure.anisotropy(points, prefix),
             "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],
@@ -276,18 +273,11 @@ def measure_task(task, counts, scales, root_seed, stored=True) -> dict:
 def error_result(counts, n_scales, dim, message) -> dict:
     """The result recorded for a task that raised (or whose worker kept dying)."""
     n_counts = len(counts)
-    nan = np.full(n_counts, np.nan)
-    return {
-        "box_count": np.zeros((n_counts, n_scales), np.int64),
-        "n_grown": np.zeros(n_counts, np.int64),
-        "status": np.full(n_counts, STATUSES.index("error"), np.int8),
-        "radius_gyration": nan, "max_radius": nan, "anisotropy": nan, "wall_time": nan,
-        "radius_gyration_history": np.full(len(growth_counts(counts)), np.nan),
-        "walk_steps": np.zeros(n_counts, np.int64),
-        "points": np.zeros((0, dim)),
-        "diffusion_time": np.zeros(0, np.int64),
-        "error": np.array(" ".join(message.split())),
-    }
+    shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
+    result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
+    result["status"][:] = STATUSES.index("error")
+    return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
+            "error": np.array(" ".join(message.split()))}
 
 
 class Parts:
@@ -302,12 +292,20 @@ class Parts:
     error; a failed one is computed again on resume, and a later part then
     holds it too. Knowing what is done reads only the indexes, once. The
     sweep sets ``done`` once its file is complete: the folder is removed.
+
+    The parts this run writes are also kept in memory, up to ``KEEP_BYTES``,
+    all but the clusters' positions and diffusion times: assembling the
+    dataset then reads back only what an earlier run wrote.
     """
+
+    KEEP_BYTES = 1 << 28
+    PER_PARTICLE = ("points", "diffusion_time")
 
     def __init__(self, path: Path):
         self.path = path
         self.done = False
         self._where = None
+        self._kept, self._kept_bytes = {}, 0
 
     @property
     def where(self) -> dict:
@@ -354,6 +352,10 @@ class Parts:
             raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
+        kept = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
+        size = sum(values.nbytes for values in kept.values())
+        if self._kept_bytes + size <= self.KEEP_BYTES:
+            self._kept[file], self._kept_bytes = {"keys": keys, **kept}, self._kept_bytes + size
 
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
@@ -366,7 +368,9 @@ class Parts:
         without reading it.
         """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
-            with self._reading(file), np.load(file) as z:
+            kept = self._kept.get(file, {})
+            with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
+                                       else np.load(file)) as z:
                 part = [{} for _ in z["keys"]]
                 for name in names:
                     if name.endswith(".shape"):
@@ -374,9 +378,10 @@ class Parts:
                             result[name] = shape
                         continue
                     flat, shapes = z[name], z[f"{name}.shape"]
-                    ends = np.cumsum([math.prod(shape) for shape in shapes])
-                    for result, shape, end in zip(part, shapes, ends):
-                        result[name] = flat[end - math.prod(shape): end].reshape(shape)
+                    sizes = shapes.prod(axis=1)
+                    ends = np.cumsum(sizes)
+                    for result, shape, start, end in zip(part, shapes.tolist(), (ends - sizes).tolist(), ends.tolist()):
+                        result[name] = flat[start:end].reshape(shape)
             yield from (part[self.where[key][1]] for key in run)
 
 
@@ -568,14 +573,8 @@ def _assemble(spec, parts):
     history = growth_counts(spec.counts)
     tasks = list(spec.tasks())
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
-    science = {
-        "box_count": np.zeros((*grid, len(scales)), np.int64),
-        "n_grown": np.zeros(grid, np.int64),
-        "status": np.zeros(grid, np.int8),
-        "walk_steps": np.zeros(grid, np.int64),
-        **{name: np.full(grid, np.nan) for name in ("radius_gyration", "max_radius", "anisotropy", "wall_time")},
-        "radius_gyration_history": np.full((*spec.shape, len(history)), np.nan),
-    }
+    shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
+    science = {name: store.blank(name, shapes.get(name, grid)) for name in (*store.SCIENCE, "wall_time")}
     sizes, failed = [], []
     for task, result in zip(tasks, parts.results((t.key for t in tasks), (*science, "points.shape", "error"))):
         for name, values in science.items():

@@ -6,13 +6,27 @@ from dlasweep.cli import main
 
 
 def test_bench_quick_writes_its_outputs(tmp_path):
-    assert main(["bench", "--quick", "-o", str(tmp_path / "bench")]) == 0
-    for name in ("bench.nc", "bench.png", "bench.txt"):
-        assert (tmp_path / "bench" / name).stat().st_size > 0
-    with xr.open_dataset(tmp_path / "bench" / "bench.nc") as ds:
+    from matplotlib.image import imread
+
+    from dlasweep.store import BENCH_SCHEMA, attributes
+
+    out = tmp_path / "bench"
+    assert main(["bench", "--quick", "-o", str(out)]) == 0
+    with xr.open_dataset(out / "bench.nc") as ds:
         assert set(ds.model.values) == {"lattice-2d", "offlattice-2d", "lattice-3d", "offlattice-3d"}
         assert (ds.seconds > 0).all() and (ds.n_grown > 0).all()
         assert "naive" in set(ds.method.values)
+        for name in BENCH_SCHEMA:
+            assert {k: ds[name].attrs[k] for k in attributes(name, schema=BENCH_SCHEMA)} == attributes(
+                name, schema=BENCH_SCHEMA), name
+        runs = ds.sizes["run"]
+    # The log: the command, a header, then one line per run: model, method, N.
+    lines = (out / "bench.txt").read_text().splitlines()
+    assert lines[0].startswith("$ dlasweep bench")
+    assert lines[1].split()[:3] == ["model", "method", "N"]
+    assert len([line for line in lines[2:] if line.split()[1:2] in (["exact"], ["naive"])]) == runs
+    picture = imread(out / "bench.png")
+    assert picture.shape[0] > 300 and picture.shape[1] > 500 and picture[..., :3].std() > 0  # drawn, not blank
 
 
 def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):

@@ -403,3 +403,28 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
     with store.open_sweep(tmp_path / "shown.nc") as ds:
         np.testing.assert_array_equal(store.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)
+
+
+def test_the_installed_command_exits_with_main_status_and_complete_output(tmp_path):
+    """``run`` skips the interpreter's teardown: the status, the output and the file must survive it."""
+    out = tmp_path / "c.nc"
+    done = subprocess.run([sys.executable, "-m", "dlasweep", "grow", "-n", "300", "--seed", "2", "-o", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert str(out) in done.stdout
+    with dla.open_sweep(out) as ds:
+        assert ds.sizes["particle"] == 300
+    bad = subprocess.run([sys.executable, "-m", "dlasweep", "grow", "-n", "0", "-o", str(tmp_path / "d.nc")],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "-n" in bad.stderr
+    assert not (tmp_path / "d.nc").exists()
+
+
+def test_a_reader_that_leaves_ends_the_command_quietly(tiny_sweep, monkeypatch, capsys):
+    class Closed(io.StringIO):
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", Closed())
+    assert cli.main(["info", str(tiny_sweep[3] / "tiny.nc")]) == 141
+    assert capsys.readouterr().err == ""

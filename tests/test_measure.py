@@ -3,48 +3,14 @@
 from __future__ import annotations
 
 import itertools
-import math
 
 import numpy as np
 import pytest
 
 import dlasweep
+import naive
 from dlasweep import measure
-from dlasweep.measure import box_counts, default_scales, mass_within, max_radius, radius_of_gyration
-
-
-def reference_offsets(scales, offsets=4):
-    """O(s) of every side s: floor(t s / offsets) for t < offsets, joined with O(s/2) when s/2 is a side too."""
-    out = {}
-    for s in sorted({int(s) for s in scales}):
-        out[s] = {t * s // offsets for t in range(offsets)} | (out.get(s // 2, set()) if s % 2 == 0 else set())
-    return out
-
-
-def slow_box_count(points, scale, lattice, offsets):
-    """The documented rule, one grid, one point and one box at a time.
-
-    Every grid anchored at ``min(points) - 1/2 - o`` is tried, o taking each
-    value of ``offsets`` (O(scale)) on each axis independently.
-    """
-    points = np.asarray(points, float)
-    points = points - points.min(axis=0)  # so the extreme disks touch the first box's edge exactly
-    best = None
-    for o in itertools.product(sorted(offsets), repeat=points.shape[1]):
-        origin = [-0.5 - a for a in o]
-        boxes = set()
-        for p in points.tolist():
-            u = [x - c for x, c in zip(p, origin)]  # in the grid's frame, box b spans [b * scale, (b + 1) * scale)
-            if lattice:
-                boxes.add(tuple(math.floor(x / scale) for x in u))
-                continue
-            # Every box meeting the disk's bounding box; kept if its nearest point lies closer than 1/2.
-            near = [range(math.floor((x - 0.5) / scale), math.floor((x + 0.5) / scale) + 1) for x in u]
-            for box in itertools.product(*near):
-                if sum((x - min(max(x, b * scale), (b + 1) * scale)) ** 2 for x, b in zip(u, box)) < 0.25:
-                    boxes.add(box)
-        best = len(boxes) if best is None else min(best, len(boxes))
-    return best
+from dlasweep.measure import box_counts, default_scales, max_radius, radius_of_gyration
 
 
 def random_set(dim, lattice, n, width, seed):
@@ -61,8 +27,8 @@ def test_box_counts_match_slow_reference(dim, lattice):
     # from the particles, their doubles by halving bitmaps, so both paths are checked.
     scales, counts = box_counts(points, lattice=lattice)
     assert scales[-1] >= width
-    offsets = reference_offsets(scales)
-    np.testing.assert_array_equal(counts, [slow_box_count(points, s, lattice, offsets[int(s)]) for s in scales])
+    offsets = naive.grid_offsets(scales)
+    np.testing.assert_array_equal(counts, [naive.box_count(points, s, lattice, offsets[int(s)]) for s in scales])
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -71,8 +37,8 @@ def test_box_counts_on_arbitrary_scales_match_reference(dim):
     # Unsorted, with a family 3, 6, 12 (and 13, 26) whose members are not neighbours.
     scales = [12, 1, 3, 13, 6, 26, 2, 5]
     _, counts = box_counts(points, lattice=False, scales=scales, offsets=3)
-    offsets = reference_offsets(scales, offsets=3)
-    np.testing.assert_array_equal(counts, [slow_box_count(points, s, False, offsets[s]) for s in scales])
+    offsets = naive.grid_offsets(scales, offsets=3)
+    np.testing.assert_array_equal(counts, [naive.box_count(points, s, False, offsets[s]) for s in scales])
 
 
 @pytest.mark.parametrize("lattice", [True, False])
@@ -89,8 +55,8 @@ def test_box_counts_of_sets_too_wide_for_a_bitmap_match_reference(spread, lattic
         points = np.round(points)
     scales = [1, 2, 3, 4, 6, 8, 16, 32, 64]
     _, counts = box_counts(points, lattice=lattice, scales=scales)
-    offsets = reference_offsets(scales)
-    np.testing.assert_array_equal(counts, [slow_box_count(points, s, lattice, offsets[s]) for s in scales])
+    offsets = naive.grid_offsets(scales)
+    np.testing.assert_array_equal(counts, [naive.box_count(points, s, lattice, offsets[s]) for s in scales])
 
 
 @pytest.mark.parametrize("cap", [0, 1 << 10, 1 << 14, 1 << 18])
@@ -137,8 +103,8 @@ def test_every_route_from_the_particles_matches_reference(monkeypatch, dim, kind
     monkeypatch.setattr(measure, kernel, lambda *args: calls.append(args) or run(*args))
     scales, counts = box_counts(points, lattice=lattice)
     assert any(took(args) for args in calls), "the route did not run"
-    offsets = reference_offsets(scales)
-    np.testing.assert_array_equal(counts, [slow_box_count(points, s, lattice, offsets[int(s)]) for s in scales])
+    offsets = naive.grid_offsets(scales)
+    np.testing.assert_array_equal(counts, [naive.box_count(points, s, lattice, offsets[int(s)]) for s in scales])
 
 
 def occupied(stack, shape):
@@ -155,7 +121,7 @@ def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(d
     points = random_set(dim, lattice, 3000 if dim == 2 else 6000, 300 if dim == 2 else 70, 11)
     points = points - points.min(axis=0)
     high, radius = points.max(axis=0), 0.0 if lattice else 0.5
-    offsets = {s: sorted(o) for s, o in reference_offsets([1, 2, 4, 3, 6, 12]).items()}
+    offsets = {s: sorted(o) for s, o in naive.grid_offsets([1, 2, 4, 3, 6, 12]).items()}
 
     def marked(side):
         # Floating-point coordinates are never put in strips.
@@ -312,7 +278,7 @@ def test_a_disk_at_exactly_half_a_unit_from_a_corner_only_touches_it(dim):
     for near, expected in ((y, 3), (np.nextafter(y, 2.0), 4)):
         points = np.array([(0.0, 0.0, 0.0), (x, near, 0.8)])[:, :dim]
         assert box_counts(points, lattice=False, scales=[2.0], offsets=1)[1][0] == expected
-        assert slow_box_count(points, 2, False, [0]) == expected
+        assert naive.box_count(points, 2, False, [0]) == expected
 
 
 def test_sphere_touches_face_neighbours_but_not_edges_or_corners():
@@ -355,27 +321,14 @@ def test_radius_of_gyration_of_every_prefix_matches_direct_computation(dim):
     # Far from the origin, where the textbook <x^2> - <x>^2 loses digits.
     points = rng.normal(size=(400, dim)) * 30 + 1e7
     rg = radius_of_gyration(points)
-    direct = [np.sqrt(((points[:k] - points[:k].mean(axis=0)) ** 2).sum(axis=1).mean()) for k in range(1, 401)]
-    np.testing.assert_allclose(rg, direct, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(rg, naive.radius_of_gyration(points), rtol=1e-9, atol=1e-9)
     assert rg[0] == 0.0
 
 
-def test_max_radius_and_mass_within_match_direct_computation():
+def test_max_radius_of_every_prefix_matches_direct_computation():
     rng = np.random.default_rng(5)
     points = rng.integers(-50, 50, (500, 2))
-    distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
-    np.testing.assert_allclose(max_radius(points), [distance[:k].max() for k in range(1, 501)])
-    radii = np.array([0.0, 1.0, 10.0, 33.3, 1e3])
-    np.testing.assert_array_equal(mass_within(points, radii), [(distance <= r).sum() for r in radii])
-
-
-def slow_anisotropy(points, m):
-    """<cos 4 theta> (2D) of the outer half of the first m points, from angles, one point at a time."""
-    seed = points[0]
-    distance = [np.hypot(*(p - seed)) for p in points[1:m]]
-    cut = np.median(distance)
-    values = [np.cos(4 * np.arctan2(*(p - seed)[::-1])) for p, d in zip(points[1:m], distance) if d >= cut]
-    return np.mean(values)
+    np.testing.assert_allclose(max_radius(points), naive.max_radius(points))
 
 
 def test_anisotropy_matches_cos_4_theta_from_angles():
@@ -384,7 +337,7 @@ def test_anisotropy_matches_cos_4_theta_from_angles():
     rng = np.random.default_rng(8)
     points = rng.normal(size=(501, 2)) * 10
     counts = [2, 3, 50, 501]
-    np.testing.assert_allclose(anisotropy(points, counts), [slow_anisotropy(points, m) for m in counts], atol=1e-12)
+    np.testing.assert_allclose(anisotropy(points, counts), [naive.anisotropy(points, m) for m in counts], atol=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -489,3 +442,32 @@ def test_prefix_box_counts_refuses_bad_input():
         measure.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
     with pytest.raises(ValueError, match="points"):
         measure.prefix_box_counts(np.zeros((3, 4)), [3])
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_cluster_measures_equal_the_functions_they_gather(dim, lattice):
+    # The sweep's one call per cluster against each measure on its own, bit
+    # for bit: clusters, random sets (sparse and full), sites beyond int32
+    # (box counts handed to box_counts), and history counts past the end.
+    rng = np.random.default_rng(10 + dim + 2 * lattice)
+    sets = [dlasweep.grow(n, seed, dim=dim, model="lattice" if lattice else "offlattice").points
+            for n, seed in [(1, 0), (400, 1), (1500, 2)]]
+    sets += [random_set(dim, seed % 2 == 0, int(rng.integers(2, 300)), 60, seed) for seed in range(4)]
+    if dim == 2:  # (in 3D, box_counts sorts 16**3 grids' boxes per side: slow, and the same route)
+        sets.append(random_set(dim, True, 12, 20, 9) * (2**30))
+    for points in sets:
+        n = len(points)
+        ends = np.array(some_prefixes(n, rng))
+        history = np.unique(np.r_[1, rng.integers(1, 2 * n + 2, 6)])
+        scales = default_scales(min(np.ptp(points, axis=0).max() + 2, 3000))
+        got = measure.cluster_measures(points, ends, history, lattice=lattice, scales=scales)
+        rg = radius_of_gyration(points)
+        np.testing.assert_array_equal(got["box_count"], measure.prefix_box_counts(points, ends, lattice, scales)[1])
+        np.testing.assert_array_equal(got["radius_gyration"], rg[ends - 1])
+        np.testing.assert_array_equal(got["radius_gyration_history"],
+                                      np.where(history <= n, rg[np.minimum(history, n) - 1], np.nan))
+        np.testing.assert_array_equal(got["max_radius"], max_radius(points)[ends - 1])
+        np.testing.assert_array_equal(got["anisotropy"], measure.anisotropy(points, ends))
+    with pytest.raises(ValueError, match="history"):
+        measure.cluster_measures(np.zeros((3, 2)), [3], [0])

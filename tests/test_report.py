@@ -12,25 +12,19 @@ import xarray as xr
 
 import dlasweep as dla
 from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
+from dlasweep import store
+from dlasweep.analysis import Readout
+from dlasweep.params import STATUSES
 from dlasweep.report import report
-
-STATUSES = "ok boundary step_limit exhausted error".split()
 
 
 def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
     """A dataset with the layout of README, "The dataset", grown and measured here, not by run_sweep."""
     scales = default_scales(counts[-1])
     shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
-    science = {
-        "box_count": np.zeros((*shape, len(scales)), np.int64),
-        "n_grown": np.zeros(shape, np.int64),
-        "status": np.zeros(shape, np.int8),
-        "radius_gyration": np.zeros(shape),
-        "max_radius": np.zeros(shape),
-        "anisotropy": np.zeros(shape),
-        "wall_time": np.zeros(shape),
-        "walk_steps": np.zeros(shape, np.int64),
-    }
+    # Every variable but the growth history (a file from before it was recorded).
+    science = {name: store.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
+               for name in (*store.SCIENCE, "wall_time") if name != "radius_gyration_history"}
     ragged, cluster = {a: [] for a in ("x", "y", "diffusion_time")}, {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
     particles = []
     for where in itertools.product(*(range(len(v)) for v in axes.values()), range(len(sizes)), range(seeds)):
@@ -56,10 +50,9 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
         particles.append(len(c.points))
         for name, value in (*params.items(), ("size", size), ("seed", seed)):
             cluster[f"cluster_{name}"].append(value)
-    dims = (*axes, "size", "n_particles", "seed")
     ds = xr.Dataset(
         {
-            **{name: ((*dims, "scale") if name == "box_count" else dims, values) for name, values in science.items()},
+            **{name: (store.dims(name, tuple(axes)), values) for name, values in science.items()},
             "cluster_particles": ("cluster", np.array(particles), {"sample_dimension": "particle"}),
             **{name: ("particle", np.concatenate(values)) for name, values in ragged.items()},
         },
@@ -75,7 +68,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
         },
         attrs={"title": "synthetic sweep", "spec": 'name = "synthetic"', "root_seed": 1, "source": "dlasweep test"},
     )
-    ds["status"].attrs.update(flag_values=np.arange(5, dtype=np.int8), flag_meanings=" ".join(STATUSES))
+    for name, var in ds.variables.items():
+        var.attrs.update(store.attributes(name, var.dtype))
     return ds
 
 
@@ -179,7 +173,7 @@ def drawn(monkeypatch, plot, ds, tmp_path):
     module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
     figures = []
     monkeypatch.setattr(module, "_save", lambda fig, path: figures.append(fig) or fig.savefig(path))
-    caption = plot(module._Sweep(ds), tmp_path / "plot.png")
+    caption = plot(Readout(ds), tmp_path / "plot.png")
     assert caption and (tmp_path / "plot.png").stat().st_size > 0
     (fig,) = figures
     fig.canvas.draw()

@@ -451,3 +451,25 @@ def test_resume_after_kill_9(external_scheduler, slow_spec, slow_reference, tmp_
     with dla.open_sweep(out) as ds:
         xr.testing.assert_identical(science(ds), slow_reference)
     assert not Path(f"{out}.parts").exists()
+
+
+@pytest.mark.parametrize("kept", [0, 1, 3])
+def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
+    # Results read back from what the run kept (none, the first part, all three) equal those read from disk.
+    spec = parse_spec(TINY_SPEC)
+    tasks = list(spec.tasks())
+    counts, scales = np.asarray(spec.counts), sweep.sweep_scales(spec)
+    parts = sweep.Parts(tmp_path)
+    monkeypatch.setattr(sweep.Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
+    for batch in (tasks[:3], tasks[3:4], tasks[4:]):
+        parts.write({t.key: r for t, r in zip(batch, sweep.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
+        if kept == 1:
+            monkeypatch.setattr(sweep.Parts, "KEEP_BYTES", parts._kept_bytes)
+    assert len(parts._kept) == kept
+    names = ("box_count", "radius_gyration_history", "status", "points.shape", "error")
+    keys = [t.key for t in tasks][::-1]
+    from_disk = list(sweep.Parts(tmp_path).results(keys, names))
+    for a, b in zip(parts.results(keys, names), from_disk, strict=True):
+        assert a.keys() == b.keys()
+        for name in a:
+            np.testing.assert_array_equal(a[name], b[name])

@@ -8,6 +8,7 @@
   walkers, and ``grow_lattice``, the entry point.
 """
 
+from .exits import exit_tables
 from .grow import grow_lattice
 
-__all__ = ["grow_lattice"]
+__all__ = ["exit_tables", "grow_lattice"]

@@ -12,6 +12,7 @@ from functools import cache
 import numpy as np
 
 from ..._jit import jit
+from ..stored import kept_on_disk
 
 TABLE_MAX = (0, 0, 64, 24)  # by dimension: largest square (cube) half-width with an exit table
 
@@ -114,7 +115,7 @@ def symmetry_classes(sites, probs):
     return reps, np.bincount(inverse.reshape(-1), weights=probs, minlength=len(reps))
 
 
-@cache
+@kept_on_disk
 def exit_tables(dim, moore):
     """Alias tables of ``exit_law`` by symmetry class (``symmetry_classes``) for
     half-widths 0..TABLE_MAX[dim] (0 and 1 empty).

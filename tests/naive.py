@@ -1,0 +1,71 @@
+"""Slow, obviously right references the suite checks the package against, in one place.
+
+Each computes one documented quantity the direct way, one point (one box,
+one prefix) at a time, for small inputs, reusing nothing of the package.
+The kernels' references (a naive lattice walk, brute-force distances and
+contacts, a brute-force walk-on-spheres) stay beside their tests in
+test_lattice.py, test_offlattice.py and test_models.py.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+
+def grid_offsets(scales, offsets=4):
+    """O(s) of every side s: floor(t s / offsets) for t < offsets, joined with O(s/2) when s/2 is a side too."""
+    out = {}
+    for s in sorted({int(s) for s in scales}):
+        out[s] = {t * s // offsets for t in range(offsets)} | (out.get(s // 2, set()) if s % 2 == 0 else set())
+    return out
+
+
+def box_count(points, scale, lattice, offsets):
+    """The documented rule, one grid, one point and one box at a time.
+
+    Every grid anchored at ``min(points) - 1/2 - o`` is tried, o taking each
+    value of ``offsets`` (O(scale)) on each axis independently.
+    """
+    points = np.asarray(points, float)
+    points = points - points.min(axis=0)  # so the extreme disks touch the first box's edge exactly
+    best = None
+    for o in itertools.product(sorted(offsets), repeat=points.shape[1]):
+        origin = [-0.5 - a for a in o]
+        boxes = set()
+        for p in points.tolist():
+            u = [x - c for x, c in zip(p, origin)]  # in the grid's frame, box b spans [b * scale, (b + 1) * scale)
+            if lattice:
+                boxes.add(tuple(math.floor(x / scale) for x in u))
+                continue
+            # Every box meeting the disk's bounding box; kept if its nearest point lies closer than 1/2.
+            near = [range(math.floor((x - 0.5) / scale), math.floor((x + 0.5) / scale) + 1) for x in u]
+            for box in itertools.product(*near):
+                if sum((x - min(max(x, b * scale), (b + 1) * scale)) ** 2 for x, b in zip(u, box)) < 0.25:
+                    boxes.add(box)
+        best = len(boxes) if best is None else min(best, len(boxes))
+    return best
+
+
+def anisotropy(points, m):
+    """<cos 4 theta> (2D) of the outer half of the first m points, from angles, one point at a time."""
+    seed = points[0]
+    distance = [np.hypot(*(p - seed)) for p in points[1:m]]
+    cut = np.median(distance)
+    values = [np.cos(4 * np.arctan2(*(p - seed)[::-1])) for p, d in zip(points[1:m], distance) if d >= cut]
+    return np.mean(values)
+
+
+def radius_of_gyration(points):
+    """Rg of every prefix: the root mean square distance from the prefix's centre of mass."""
+    points = np.asarray(points, float)
+    return np.array([np.sqrt(((points[:k] - points[:k].mean(axis=0)) ** 2).sum(axis=1).mean())
+                     for k in range(1, len(points) + 1)])
+
+
+def max_radius(points):
+    """Largest distance from the seed (the first point) of every prefix."""
+    distance = np.sqrt(((np.asarray(points, float) - points[0]) ** 2).sum(axis=1))
+    return np.array([distance[:k].max() for k in range(1, len(points) + 1)])

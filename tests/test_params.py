@@ -1,0 +1,45 @@
+"""The parameter table is the one source: resolve, the README and the package's public names follow it."""
+
+import pytest
+from conftest import ROOT
+
+import dlasweep as dla
+from dlasweep.params import DEFAULTS, PARAMETERS, markdown_table, resolve
+
+
+def test_readme_parameter_table_is_the_table():
+    readme = (ROOT / "README.md").read_text()
+    assert markdown_table() in readme, "README's table of 'The model' differs from params.PARAMETERS"
+
+
+def test_resolve_fills_every_default_with_its_type():
+    p = resolve()
+    assert list(p) == list(PARAMETERS)
+    for name, par in PARAMETERS.items():
+        assert type(p[name]) is par.kind, name
+    assert p["neighbours"] == 4 and resolve(dim=3)["neighbours"] == 6
+    assert {k: v for k, v in p.items() if k != "neighbours"} == {k: v for k, v in DEFAULTS.items() if k != "neighbours"}
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("dim", True, "dim: expected an integer"),
+    ("stickiness", 0.0, "stickiness: 0.0 is not in (0, 1]"),
+    ("size", 4, "size: 4 is below 8"),
+    ("seed_shape", "line", "seed_shape: 'line' needs size > 0"),
+    ("model", "hex", "model: 'hex' is not one of"),
+    ("walkers", 2, "walkers: more than one walker needs size > 0"),
+])
+def test_each_check_names_its_parameter(name, value, message):
+    with pytest.raises(ValueError, match="^" + message.replace("(", r"\(").replace(")", r"\)").replace("[", r"\[")
+                       .replace("]", r"\]")):
+        resolve(**{name: value})
+
+
+def test_dir_lists_the_public_api():
+    import importlib
+
+    module = importlib.import_module("dlasweep.report")  # the submodule named like the function does not hide it
+    assert dla.report is module.report
+    assert set(dla.__all__) <= set(dir(dla))
+    for name in ("run_sweep", "open_sweep", "cluster_points", "summarise", "report"):
+        assert name in dir(dla) and callable(getattr(dla, name)), name
