@@ -66,7 +66,7 @@ def compiled(model: str) -> bool:
 
     Only this process's cache is looked at: the embedded cluster's too.
     """
-    kernel = {"lattice": lattice._grow, "offlattice": offlattice._grow}[model]
+    kernel = {"lattice": lattice.grow._grow, "offlattice": offlattice.grow._walk}[model]
     return os.path.exists(kernel._cache._cache_file._index_path)
 
 

@@ -5,14 +5,14 @@ import pytest
 from scipy.stats import chi2
 
 from dlasweep.kernels import maps
-from dlasweep.kernels.lattice import (
+from dlasweep.kernels.lattice.exits import (
     TABLE_MAX,
-    _fine3,
-    _moves,
-    _symmetry,
     exit_law,
     exit_tables,
+    symmetry,
+    unit_moves,
 )
+from dlasweep.kernels.lattice.words import fine3
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -32,7 +32,7 @@ def test_exit_law_is_a_symmetric_law_on_the_boundary(dim, moore):
 
 def test_exit_law_at_half_width_one_is_one_step():
     sites, probs = exit_law(2, False, 1)
-    assert sorted(map(tuple, sites)) == sorted(map(tuple, _moves(2, False)[:, :2]))
+    assert sorted(map(tuple, sites)) == sorted(map(tuple, unit_moves(2, False)[:, :2]))
     np.testing.assert_allclose(probs, 0.25)
 
 
@@ -46,7 +46,7 @@ def test_exit_law_matches_single_steps(dim, moore, r):
     which differs by several percent near corners) fails every time.
     """
     rng = np.random.default_rng(5)
-    moves = _moves(dim, moore)[:, :dim]
+    moves = unit_moves(dim, moore)[:, :dim]
     walks = 40_000
     x = np.zeros((walks, dim), np.int64)
     alive = np.ones(walks, bool)
@@ -77,7 +77,7 @@ def test_alias_tables_reproduce_the_law(dim, moore):
         law = {}
         for rep, p in zip(offsets[lo:hi], implied):
             for g in range(group):
-                site = _symmetry(g, dim, *rep.astype(np.int64))[:dim]
+                site = symmetry(g, dim, *rep.astype(np.int64))[:dim]
                 law[site] = law.get(site, 0.0) + p / group
         sites, probs = exit_law(dim, moore, r)
         assert sorted(law) == sorted(map(tuple, sites))
@@ -88,13 +88,13 @@ def test_alias_tables_reproduce_the_law(dim, moore):
 def test_symmetries_are_the_whole_group(dim):
     """Every signed permutation of the axes, each once."""
     group = 8 if dim == 2 else 48
-    images = {_symmetry(g, dim, 1, 2, 3)[:dim] for g in range(group)}
+    images = {symmetry(g, dim, 1, 2, 3)[:dim] for g in range(group)}
     assert len(images) == group
     assert all(sorted(map(abs, s)) == list(range(1, dim + 1)) for s in images)
 
 
 def test_fine_distance_matches_brute_force_3d():
-    """``_fine3`` (word masks) against the Chebyshev distance to every particle, capped at 5."""
+    """``fine3`` (word masks) against the Chebyshev distance to every particle, capped at 5."""
     rng = np.random.default_rng(0)
     width = 32
     for density in (0.0005, 0.002, 0.01, 0.05):
@@ -106,7 +106,7 @@ def test_fine_distance_matches_brute_force_3d():
             cube = np.zeros(27, np.uint64)
             for q in rng.integers(0, width, (50, 3)):
                 d = np.abs(pts - q).max(1).min() if len(pts) else 5
-                assert _fine3(words, blocks[0], q[0], q[1], q[2], cube) == min(d, 5)
+                assert fine3(words, blocks[0], q[0], q[1], q[2], cube) == min(d, 5)
 
 
 def _random_points(rng, dim, width, density):

@@ -13,27 +13,27 @@ import dlasweep as dla
 from dlasweep.kernels import walk
 from dlasweep.kernels.offlattice import EPS
 
-OFF = dict(model="offlattice")
+OFF = {"model": "offlattice"}
 VARIANTS = {
-    "2d": dict(),
-    "3d": dict(dim=3),
-    "block": dict(seed_shape="block"),
-    "block-3d": dict(seed_shape="block", dim=3),
-    "sticky": dict(stickiness=0.3),
-    "line": dict(seed_shape="line", size=40),
-    "narrow": dict(seed_shape="line", size=9),  # the neighbour list's radius exceeds half the period
-    "plane": dict(seed_shape="line", size=16, dim=3),
-    "line-box": dict(seed_shape="line", size=40, launch="box"),
-    "box": dict(size=96),
-    "box-launch": dict(size=96, launch="box"),
-    "kill": dict(kill_factor=1.5),
-    "far-launch": dict(launch_factor=1.5, launch_margin=6.0),
-    "nojumps": dict(jumps=False),
-    "walkers": dict(size=40, walkers=300),
-    "walkers-3d": dict(size=16, walkers=300, dim=3),
+    "2d": {},
+    "3d": {"dim": 3},
+    "block": {"seed_shape": "block"},
+    "block-3d": {"seed_shape": "block", "dim": 3},
+    "sticky": {"stickiness": 0.3},
+    "line": {"seed_shape": "line", "size": 40},
+    "narrow": {"seed_shape": "line", "size": 9},  # the neighbour list's radius exceeds half the period
+    "plane": {"seed_shape": "line", "size": 16, "dim": 3},
+    "line-box": {"seed_shape": "line", "size": 40, "launch": "box"},
+    "box": {"size": 96},
+    "box-launch": {"size": 96, "launch": "box"},
+    "kill": {"kill_factor": 1.5},
+    "far-launch": {"launch_factor": 1.5, "launch_margin": 6.0},
+    "nojumps": {"jumps": False},
+    "walkers": {"size": 40, "walkers": 300},
+    "walkers-3d": {"size": 16, "walkers": 300, "dim": 3},
 }
 EXACT = {k: v for k, v in VARIANTS.items()}
-GAUSS = {"gauss": dict(step=0.3), "gauss-nojumps": dict(step=0.5, jumps=False), "gauss-3d": dict(step=0.3, dim=3)}
+GAUSS = {"gauss": {"step": 0.3}, "gauss-nojumps": {"step": 0.5, "jumps": False}, "gauss-3d": {"step": 0.3, "dim": 3}}
 
 
 def contacts(points, params):
@@ -208,7 +208,6 @@ def test_return_to_sphere_3d_escape_and_law(numba_rng):
 
 
 def _bond_directions(points, nseed):
-    tree = cKDTree(points)
     out = []
     for i in range(nseed, len(points)):
         d = points[:i] - points[i]
@@ -280,7 +279,7 @@ def test_fractal_dimension_3d():
 def test_stickiness_makes_denser_and_kill_factor_agrees():
     """Low stickiness compacts the cluster (smaller Rg at the same N)."""
     rg = {}
-    for name, extra in {"exact": {}, "sticky": dict(stickiness=0.05)}.items():
+    for name, extra in {"exact": {}, "sticky": {"stickiness": 0.05}}.items():
         rg[name] = np.mean([dla.radius_of_gyration(dla.grow(1500, seed=s, **OFF, **extra).points)[-1]
                             for s in range(3)])
     assert rg["sticky"] < 0.85 * rg["exact"]
@@ -295,7 +294,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     """The free-distance bound of the distance field and maps never exceeds
     the brute-force nearest centre distance, and the field holds the exact
     capped Chebyshev distance between coarse cells; random clustered sets."""
-    from dlasweep.kernels import offlattice as ol
+    from dlasweep.kernels.offlattice import cells as ol
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0
@@ -306,7 +305,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
         pts[:, :-1] %= size
         pts[:, -1] = np.abs(pts[:, -1])
     need = pts[:, -1].max() if line else np.abs(pts).max()
-    gi, gf, words, start, blocks, cells, dirr, heads, field = ol._build_grid(
+    gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
     # the field against brute force (images included where the sides are periodic)
     W, fs, cap = gi[9], 1 << ol.FS, gi[17]
@@ -328,7 +327,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
         q[:, -1] = np.abs(q[:, -1])
     tree = cKDTree(np.concatenate([pts + e for e in images]))
     true = tree.query(q)[0]
-    bound = np.array([ol._map_dist(np.r_[x, np.zeros(3 - dim)], dim, size, gi, words, start, blocks, cells, field)
+    bound = np.array([ol.map_dist(np.r_[x, np.zeros(3 - dim)], dim, size, gi, words, start, blocks, cells, field)
                       for x in q])
     on = bound >= 0
     assert on.mean() > 0.9

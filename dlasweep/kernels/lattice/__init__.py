@@ -1,0 +1,14 @@
+"""Square and simple-cubic lattice DLA.
+
+- ``exits``: the exact law of where the lattice walk first leaves a square
+  (cube), tabulated as alias tables by symmetry class;
+- ``words``: the bit-packed occupancy of the sites, and exact Chebyshev
+  distances a few sites out from whole 64-bit words;
+- ``grow``: the walk from release to contact, attachment, the lockstep
+  walkers, and ``grow_lattice``, the entry point.
+"""
+
+from .exits import exit_tables
+from .grow import grow_lattice
+
+__all__ = ["exit_tables", "grow_lattice"]

@@ -1,0 +1,586 @@
+"""Lattice growth: the walk of one walker from release to contact, the
+attachment of particles, and the lockstep walkers.
+
+Near the cluster the walk is an exact lattice random walk. A walker whose
+nearest particle is at Chebyshev distance ``d >= 3`` jumps to where the
+lattice walk first leaves the square (cube) of half-width ``d - 1`` around it
+(``exits``): no site inside touches the cluster, so this is exact, and every
+contact is still a lattice contact. Within two sites it takes single steps.
+``d`` comes from the bit-packed occupancy words near the walker (``words``),
+the coarse Chebyshev distance field and the hierarchical maps (``maps``).
+Far from the cluster (beyond the distances the tables cover) the walker moves
+by walk-on-circles/spheres jumps, which treat the lattice walk as Brownian at
+scales of ``CIRCLE_MIN`` sites and more; outside the launch circle it returns
+exactly (Poisson kernel) instead of wandering off.
+"""
+
+import numpy as np
+
+from ..._jit import clock, jit
+from .. import maps
+from .. import model as codes
+from ..model import checkpoint, grown, model_from, sticks_xo
+from ..walk import (
+    below,
+    direction,
+    return_to_plane,
+    return_to_sphere,
+    seed_stream,
+    uniform,
+    xdir,
+    xo,
+)
+from .exits import TABLE_MAX, exit_tables, symmetry, unit_moves
+from .words import (
+    FIELD_CAP,
+    fine2,
+    fine3,
+    in_contact,
+    mark_images,
+    occupied,
+    rebuild,
+    site_word,
+    word_at,
+)
+
+JUMP_MARGIN = 2.0  # sites kept between a circle jump and the nearest particle
+CIRCLE_MIN = 16.0  # smallest circle jump: below it the exact square jumps do the work
+GROWTH = 1.25  # the grid's side grows by this factor when the cluster outgrows it
+
+
+@jit
+def _site(x):
+    """The lattice site nearest the point x (one coordinate)."""
+    return np.int64(np.floor(x + 0.5))
+
+
+@jit
+def _outside(q, dim, line, lo, hi):
+    """Whether site q has left the box (for substrates: through the top)."""
+    if line:
+        return q[dim - 1] > hi
+    for a in range(dim):
+        if q[a] < lo or q[a] > hi:
+            return True
+    return False
+
+
+@jit
+def _near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+    """One site of the exact lattice walk: stick, or step to a random neighbour.
+
+    The walker first sticks with probability ``stickiness`` if it touches the
+    cluster, else it steps (staying put when the neighbour is occupied).
+    ``near`` False promises that no particle is within two sites, which
+    spares the contact and occupancy tests. Returns whether it stuck.
+    """
+    up = dim - 1
+    line = period > 0
+    if (near or (line and q[up] <= 1)) and in_contact(words, dim, start, blocks, width, off, q, moves, period):
+        stuck, rs[0], rs[1], rs[2], rs[3] = sticks_xo(stickiness, rs[0], rs[1], rs[2], rs[3])
+        if stuck:
+            return True
+    m = np.int64(uniform(rs) * moves.shape[0])
+    n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+    if line:
+        n0 = n0 % period
+        if dim == 3:
+            n1 = n1 % period
+    blocked = near and occupied(words, dim, start, blocks, width, off, n0, n1, n2)
+    if not blocked and not (line and (n2 if dim == 3 else n1) < 0):
+        q[0], q[1], q[2] = n0, n1, n2
+    return False
+
+
+@jit
+def _near_walk(
+    words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+    boxed, lo, hi, radius, budget,
+):
+    """Single lattice steps from site q until the walker sticks or may leave.
+
+    It stops, without sticking, after ``budget`` steps (0: no limit), on
+    leaving the box or beyond ``radius`` (0: none).
+
+    Returns
+    -------
+    stuck : bool
+    taken : int, the steps taken
+    """
+    up = dim - 1
+    line = period > 0
+    taken = 0
+    while True:
+        i, j, k = q[0] + off, q[1] + off, q[2] + off
+        ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
+        # a clear level-1 cell: no particle within two sites
+        near = ingrid and maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1)
+        if _near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+            return True, taken
+        taken += 1
+        if taken == budget:
+            return False, taken
+        if boxed and _outside(q, dim, line, lo, hi):
+            return False, taken
+        if radius > 0.0:
+            r2 = float(q[up] * q[up]) if line else float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])
+            if r2 > radius * radius:
+                return False, taken
+
+
+@jit
+def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
+    """Whether site q touches a particle (or the substrate) under ``moves``:
+    ``words.in_contact`` as the single walker's hot loop reads the words,
+    where ``_grow`` holds a copy of this body, spelled out."""
+    touch = False
+    for m in range(nm):
+        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+        if line:
+            if (n2 if dim == 3 else n1) < 0:
+                touch = True
+                break
+            n0 = n0 % period
+            if dim == 3:
+                n1 = n1 % period
+        cw, cb = site_word(dim, nb0, width, off, n0, n1, n2)
+        if cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0):
+            touch = True
+            break
+    return touch
+
+
+@jit
+def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1, s2, s3):
+    """One lattice step from site q to a random neighbour, into ``pos``
+    unless the neighbour is occupied (or below the substrate); the stream
+    in registers, returned. ``_grow`` holds a copy of this body, spelled out."""
+    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+    m = np.int64(u * nm)
+    n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+    if line:
+        n0 = n0 % period
+        if dim == 3:
+            n1 = n1 % period
+    cw, cb = site_word(dim, nb0, width, off, n0, n1, n2)
+    filled = cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
+    if not filled and not (line and (n2 if dim == 3 else n1) < 0):
+        pos[0], pos[1], pos[2] = n0, n1, n2
+    return s0, s1, s2, s3
+
+
+@jit
+def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
+    """Add the particle at site q; the grid grows (is rebuilt) when the cluster nears its edge.
+
+    ``grid`` is (words, start, blocks, cells, field, width, off). Returns the
+    new count, r_max, h_max and grid.
+    """
+    words, start, blocks, cells, field, width, off = grid
+    line = period > 0
+    up = dim - 1
+    for a in range(dim):
+        points[count, a] = q[a]
+    steps[count] = pending
+    count += 1
+    r_max = max(r_max, np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])))
+    h_max = max(h_max, float(q[up]))
+    extent = 0
+    for a in range(dim):
+        extent = max(extent, abs(q[a]))
+    if (q[up] + off + 4 >= width) if line else (extent + 4 >= off):
+        # room for the cluster, in whole words (8 or 4 sites) of the field's cells
+        width = (int(width * GROWTH) + 15) // 16 * 16
+        if not line:
+            off = width // 2
+        words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+    else:
+        mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim])
+    return count, r_max, h_max, (words, start, blocks, cells, field, width, off)
+
+
+@jit
+def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
+    """Grow a lattice cluster of up to ``n`` particles.
+
+    After the seed, one walker at a time is released on the launch circle
+    (or the box's surface) and walks until it sticks or leaves; with more
+    than one walker ``_lockstep`` takes over instead. The single walker's
+    loop stays in this function: split into its own, the 1e6 growth measured
+    2% slower, within the noise but not needed.
+
+    Parameters
+    ----------
+    n : int
+    model : Model
+        The model (``kernels.model.Model``).
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts (``exits.unit_moves``).
+    marks : int64 (K,)
+        Particle counts at which to read the clock, ascending.
+    rng : numpy.random.Generator
+    points : int32 (n, dim), steps : int64 (n,)
+        Filled with the sites and diffusion times of the particles grown.
+    times : float64 (K,)
+        Filled with the seconds at each mark as it passes.
+    t_start, t_cut, t_alias, t_off
+        The exit tables (``exits.exit_tables``).
+
+    Returns
+    -------
+    count : int
+    status : int, a code of ``dlasweep.params.STATUSES``
+    """
+    t0 = clock()
+    dim, size = model.dim, model.size
+    line = model.seed_shape == codes.LINE
+    period = size if line else 0
+    rs = seed_stream(rng)
+    width = 64 if not line else 4 * size
+    off = width // 2 if not line else size
+    count = 0
+    r_max = 0.0
+    h_max = -1.0
+    if model.seed_shape == codes.POINT:
+        count = min(n, 1)
+    elif model.seed_shape == codes.BLOCK:
+        count = min(n, 1 << dim)
+        for p in range(count):
+            for a in range(dim):
+                points[p, a] = (p >> a) & 1
+    for p in range(count):
+        r_max = max(r_max, np.sqrt(np.sum(points[p].astype(np.float64) ** 2)))
+    words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+    grid = (words, start, blocks, cells, field, width, off)
+    passed = checkpoint(marks, times, 0, count, t0)
+    if model.walkers > 1:
+        return _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, count, r_max, h_max, grid)
+    stickiness, max_steps, jumps = model.stickiness, model.max_steps, model.jumps
+    launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
+    up = dim - 1
+    boxed = size > 0 and not line
+    lo = -(size // 2)
+    hi = size - 1 + lo
+    top = TABLE_MAX[dim]
+    group = 8 if dim == 2 else 48  # symmetries of the square (cube)
+    rounding = 0.5 * np.sqrt(dim)  # how far a site can be from the point it rounds
+    field_far = ((FIELD_CAP[dim] - 1) << maps.FIELD_SHIFT) + 1  # the field's largest bound
+    nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+    nm = moves.shape[0]
+    cube = np.zeros(27, np.uint64)
+    pos = np.zeros(3)
+    q = np.zeros(3, np.int64)
+    scratch = np.zeros(3)
+    total = np.int64(0)
+    pending = np.int64(0)  # steps since the previous attachment
+    status = codes.OK
+    # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
+    box_lo = 0 if line else lo
+    box_hi = size - 1 if line else hi
+    need_launch = True
+    stuck = False
+    level = 1
+    while count < n:
+        if max_steps > 0 and total >= max_steps:
+            status = codes.STEP_LIMIT
+            break
+        launch_r = model.launch_factor * (max(h_max, 0.0) if line else r_max) + model.launch_margin
+        if boxed and not launch_box and launch_r > -lo - 1:
+            status = codes.BOUNDARY
+            break
+
+        if need_launch:
+            need_launch = False
+            if launch_box:
+                ax = below(rng, dim)
+                for a in range(dim):
+                    pos[a] = (0 if line else lo) + below(rng, size)
+                if line:
+                    pos[up] = size - 1
+                else:
+                    pos[ax] = lo if rng.random() < 0.5 else hi
+            elif line:
+                for a in range(up):
+                    pos[a] = rng.random() * size
+                pos[up] = launch_r
+            else:
+                direction(rng, dim, scratch)
+                for a in range(dim):
+                    pos[a] = launch_r * scratch[a]
+        kill_r = kill_factor * launch_r
+        # any radius beyond the launch circle is exact for the return; a
+        # unit gap spares a walker that rounding put a hair outside it
+        return_r = launch_r + 1.0 if model.exact_return else 0.0
+        budget = max_steps - total if max_steps > 0 else np.int64(-1)
+        # one walker's moves until it sticks, leaves, or spends the budget;
+        # the stream's state lives in registers meanwhile
+        s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+        while budget != 0:
+            r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
+            if kill and r > kill_r:
+                need_launch = True
+                break
+            if return_r > 0.0 and r > return_r:
+                total += 1
+                pending += 1
+                budget -= 1
+                if line:
+                    return_to_plane(rng, dim, pos, launch_r, size)
+                elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
+                    need_launch = True
+                    break
+                continue
+            for a in range(3):
+                q[a] = _site(pos[a])
+            if (boxed or launch_box) and _outside(q, dim, line, box_lo, box_hi):
+                need_launch = True
+                break
+            if not jumps:
+                rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+                stuck, taken = _near_walk(
+                    words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+                    boxed or launch_box, box_lo, box_hi, kill_r if kill else return_r,
+                    max(budget, 0),
+                )
+                s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+                total += taken
+                pending += taken
+                for a in range(3):
+                    pos[a] = q[a]
+                break
+            i, j, k = q[0] + off, q[1] + off, q[2] + off
+            ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
+            # a clear level-1 cell: no particle within two sites
+            near = False
+            if ingrid:
+                cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
+                near = (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
+            if near or (line and q[up] <= 1):
+                # >>> touches, then step_to, spelled out: calls that pass arrays
+                # would cost reference counting (a test holds the texts together)
+                touch = False
+                for m in range(nm):
+                    n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+                    if line:
+                        if (n2 if dim == 3 else n1) < 0:
+                            touch = True
+                            break
+                        n0 = n0 % period
+                        if dim == 3:
+                            n1 = n1 % period
+                    cw, cb = site_word(dim, nb0, width, off, n0, n1, n2)
+                    if cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0):
+                        touch = True
+                        break
+                # <<< touches
+                if touch:
+                    touch, s0, s1, s2, s3 = sticks_xo(stickiness, s0, s1, s2, s3)
+                if touch:
+                    stuck = True
+                    break
+                # >>> step_to
+                s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                m = np.int64(u * nm)
+                n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+                if line:
+                    n0 = n0 % period
+                    if dim == 3:
+                        n1 = n1 % period
+                cw, cb = site_word(dim, nb0, width, off, n0, n1, n2)
+                filled = cw >= 0 and (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
+                if not filled and not (line and (n2 if dim == 3 else n1) < 0):
+                    pos[0], pos[1], pos[2] = n0, n1, n2
+                # <<< step_to
+                total += 1
+                pending += 1
+                budget -= 1
+                continue
+            # Chebyshev distance to the cluster, at least 3 here (the level-1
+            # cell is clear): exact within a few sites (the words), then the
+            # field, then the maps
+            if ingrid:
+                cell = maps.field_get(field, dim, width, i, j, k)
+                if cell > 1:
+                    d = ((cell - 1) << maps.FIELD_SHIFT) + 1
+                elif dim == 2:
+                    bx, by = i >> 3, j >> 3
+                    d = fine2(
+                        word_at(words, nb0, bx - 1, by - 1, 0), word_at(words, nb0, bx, by - 1, 0),
+                        word_at(words, nb0, bx + 1, by - 1, 0), word_at(words, nb0, bx - 1, by, 0),
+                        words[bx + nb0 * by], word_at(words, nb0, bx + 1, by, 0),
+                        word_at(words, nb0, bx - 1, by + 1, 0), word_at(words, nb0, bx, by + 1, 0),
+                        word_at(words, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
+                    )
+                else:
+                    d = fine3(words, nb0, i, j, k, cube)
+                if d >= field_far:
+                    level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
+                    d = max(d, np.int64(bound + 0.5))
+            else:
+                d = 5  # every particle lies 4 sites inside the grid
+            free = r - (h_max if line else r_max)  # Euclidean, from the float position
+            if line:
+                d = min(max(d, np.int64(free)), period, q[up] + 1)
+            free = max(free, d - rounding)
+            if line:
+                free = min(free, pos[up] + 1.0)
+            reach = free - JUMP_MARGIN
+            half = min(d - 1, top)
+            if kill:
+                reach = min(reach, kill_r - r)
+                qr = np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]))
+                half = min(half, np.int64((kill_r - qr) / np.sqrt(dim)) + 1)
+            if boxed:
+                for a in range(dim):
+                    reach = min(reach, pos[a] - lo, hi - pos[a])
+                    half = min(half, q[a] - lo + 1, hi - q[a] + 1)
+            elif line and launch_box:
+                reach = min(reach, box_hi - pos[up])
+                half = min(half, box_hi - q[up] + 1)
+            total += 1
+            pending += 1
+            budget -= 1
+            if reach >= CIRCLE_MIN and reach > half:
+                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                pos[0] += reach * u0
+                pos[1] += reach * u1
+                pos[2] += reach * u2
+            elif half >= 2:
+                # exact: where the lattice walk first leaves the square of half-width `half`
+                s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                u *= t_start[half + 1] - t_start[half]
+                e = np.int64(u)
+                if u - e >= t_cut[t_start[half] + e]:
+                    e = t_alias[t_start[half] + e]
+                e += t_start[half]
+                # a uniform symmetry of the square spreads the class over its orbit
+                s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                o0, o1, o2 = symmetry(np.int64(u * group), dim, t_off[e, 0], t_off[e, 1], t_off[e, 2])
+                pos[0], pos[1], pos[2] = q[0] + o0, q[1] + o1, q[2] + o2
+            else:
+                # no particle within two sites: a plain step
+                s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+                m = np.int64(u * nm)
+                for a in range(dim):
+                    pos[a] = q[a] + moves[m, a]
+            if line:
+                for a in range(up):
+                    pos[a] = pos[a] % period
+        rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+        if stuck:
+            count, r_max, h_max, grid = _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid)
+            words, start, blocks, cells, field, width, off = grid
+            nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+            pending = 0
+            passed = checkpoint(marks, times, passed, count, t0)
+            need_launch = True
+            stuck = False
+            # with box launch, growth ends where the cluster meets the box
+            if launch_box and _outside(q, dim, line, box_lo + 2, box_hi - 2):
+                status = codes.BOUNDARY
+                break
+    return count, status
+
+
+@jit
+def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, count, r_max, h_max, grid):
+    """Grow with ``model.walkers`` walkers at once: a finite concentration.
+
+    They start on free sites uniformly in the box and take single steps in
+    turn; none is relaunched, one that leaves the box is removed, and one
+    whose site another walker just filled coalesces with it. Takes over from
+    ``_grow`` once the seed is placed (its arguments are ``_grow``'s state)
+    and returns (count, status).
+    """
+    dim, size, walkers, max_steps, stickiness = model.dim, model.size, model.walkers, model.max_steps, model.stickiness
+    line = model.seed_shape == codes.LINE
+    period = size if line else 0
+    lo = -(size // 2)
+    # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
+    box_lo = 0 if line else lo
+    box_hi = size - 1 if line else size - 1 + lo
+    words, start, blocks, _cells, _field, width, off = grid
+    q = np.zeros(3, np.int64)
+    alive = np.zeros(walkers, np.bool_)
+    wpos = np.zeros((walkers, 3), np.int64)
+    placed = 0
+    while placed < walkers:
+        for a in range(dim):
+            wpos[placed, a] = box_lo + below(rng, box_hi - box_lo + 1)
+        if not occupied(words, dim, start, blocks, width, off, wpos[placed, 0], wpos[placed, 1], wpos[placed, 2]):
+            alive[placed] = True
+            placed += 1
+    live = walkers
+    turn = 0
+    total = np.int64(0)
+    pending = np.int64(0)  # steps since the previous attachment
+    status = codes.OK
+    while count < n:
+        if max_steps > 0 and total >= max_steps:
+            status = codes.STEP_LIMIT
+            break
+        if live == 0:
+            status = codes.EXHAUSTED
+            break
+        w = turn
+        turn = (turn + 1) % walkers
+        if not alive[w]:
+            continue
+        for a in range(3):
+            q[a] = wpos[w, a]
+        if occupied(words, dim, start, blocks, width, off, q[0], q[1], q[2]):
+            # another walker just filled this site: the two coalesce
+            alive[w] = False
+            live -= 1
+            continue
+        stuck, taken = _near_walk(
+            words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
+            True, box_lo, box_hi, 0.0, 1,
+        )
+        total += taken
+        pending += taken
+        for a in range(3):
+            wpos[w, a] = q[a]
+        if stuck:
+            count, r_max, h_max, grid = _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid)
+            words, start, blocks, _cells, _field, width, off = grid
+            pending = 0
+            passed = checkpoint(marks, times, passed, count, t0)
+            alive[w] = False
+            live -= 1
+        elif _outside(q, dim, line, box_lo, box_hi):
+            alive[w] = False
+            live -= 1
+    return count, status
+
+
+def grow_lattice(n, p, marks, rng, times=None):
+    """Grow a lattice cluster; see ``dlasweep.grow`` for the meaning.
+
+    Parameters
+    ----------
+    n : int
+    p : dict
+        Model parameters as ``dlasweep.params.resolve`` returns them.
+    marks : int64 (K,)
+        Particle counts at which to record the time.
+    rng : numpy.random.Generator
+    times : float64 (K,), optional
+        Filled as the marks pass (NaN before), so that another thread can
+        watch the growth.
+
+    Returns
+    -------
+    points : int32 (n_grown, dim)
+    steps : int64 (n_grown,)
+    status : int code into ``dlasweep.params.STATUSES``
+    times : float64 seconds at each of ``marks`` (NaN when not reached)
+    """
+    model = model_from(p)
+    moore = model.neighbours != 2 * model.dim
+    points = np.zeros((n, model.dim), np.int32)
+    steps = np.zeros(n, np.int64)
+    times = np.full(len(marks), np.nan) if times is None else times
+    count, status = _grow(n, model, unit_moves(model.dim, moore), np.asarray(marks, np.int64), rng, points, steps,
+                          times, *exit_tables(model.dim, moore))
+    return grown(points, steps, count, status, times)

@@ -1,0 +1,195 @@
+"""The lattice's bit-packed occupancy: marking particles, testing sites, and
+exact Chebyshev distances a few sites out from whole 64-bit words.
+
+The grid is ``maps``' (segment 0 a bit per site, 8x8 or 4x4x4 sites per
+word, then the dilated levels) with a coarse distance field beside it; a
+site q of the lattice is cell q + ``off`` of the grid, whose side is
+``width``. A substrate's periodic images are marked too.
+"""
+
+import numpy as np
+
+from ..._jit import jit
+from .. import maps
+
+FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, in cells of 4 sites
+
+
+@jit
+def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
+    """Mark a particle at site q, with its periodic images for substrates.
+
+    ``cap`` 1 marks only the particle's own cell of the field (for
+    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``.
+    """
+    reach = 1 if period > 0 else 0
+    zreach = reach if dim == 3 else 0
+    for a in range(-reach, reach + 1):
+        for b in range(-zreach, zreach + 1):
+            i = q[0] + a * period + off
+            j = q[1] + (b * period if dim == 3 else 0) + off
+            k = q[2] + off
+            if 0 <= i < width and 0 <= j < width and 0 <= k < width:
+                maps.mark(words, dim, start, blocks, cells, i, j, k)
+                maps.field_mark(field, dim, width, i, j, k, cap)
+
+
+@jit
+def rebuild(points, count, dim, width, off, period):
+    words, start, blocks, cells = maps.allocate(dim, width)
+    field = maps.field_allocate(dim, width, FIELD_CAP[dim])
+    q = np.zeros(3, np.int64)
+    for p in range(count):
+        for a in range(dim):
+            q[a] = points[p, a]
+        mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
+    maps.field_fill(field, dim, width, FIELD_CAP[dim])
+    return words, start, blocks, cells, field
+
+
+@jit
+def occupied(words, dim, start, blocks, width, off, q0, q1, q2):
+    i, j, k = q0 + off, q1 + off, q2 + off
+    if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
+        return False
+    return maps.test(words, dim, start, blocks, 0, i, j, k)
+
+
+@jit
+def site_word(dim, nb, width, off, q0, q1, q2):
+    """Word and bit of site q in the occupancy segment, word -1 outside the grid.
+
+    Scalars only, for the hot loop, which reads the word itself: a helper
+    that takes the array costs atomic reference counting per call.
+    """
+    i, j, k = q0 + off, q1 + off, q2 + off
+    if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
+        return -1, 0
+    return maps.index(dim, 0, nb, i, j, k)
+
+
+@jit
+def in_contact(words, dim, start, blocks, width, off, q, moves, period):
+    """Whether site q touches a particle (or the substrate) under ``moves``."""
+    for m in range(moves.shape[0]):
+        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+        if period > 0:
+            if (n2 if dim == 3 else n1) < 0:
+                return True
+            n0 = n0 % period
+            if dim == 3:
+                n1 = n1 % period
+        if occupied(words, dim, start, blocks, width, off, n0, n1, n2):
+            return True
+    return False
+
+
+@jit
+def _row2(w0, w1, w2, t):
+    """Row t (0..7) of three 8x8 words side by side: 24 sites as bits."""
+    shift = np.uint64(8 * t)
+    return (
+        ((w0 >> shift) & np.uint64(255))
+        | (((w1 >> shift) & np.uint64(255)) << np.uint64(8))
+        | (((w2 >> shift) & np.uint64(255)) << np.uint64(16))
+    )
+
+
+@jit
+def word_at(words, nb, x, y, z):
+    """Word (x, y, z) of the occupancy segment, empty outside the grid."""
+    inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
+    return words[x + nb * (y + nb * z)] if inside else np.uint64(0)
+
+
+@jit
+def fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
+    """Chebyshev distance from site (x, y) of word b1 to the nearest particle, capped at 9.
+
+    ``a*``, ``b*``, ``c*`` are the 3x3 words (8x8 sites each, rows a below)
+    around the walker's, which cover 8 sites on every side, so the result is
+    exact below the cap. Rows of 24 sites are OR-ed outwards from the
+    walker's row; the square of half-width r is hit when the OR of its rows
+    has a bit within r columns. Scalars only: a call that passes arrays costs
+    atomic reference counting when numba does not inline it.
+    """
+    x += 8
+    seen = _row2(b0, b1, b2, y)
+    found = 9
+    for r in range(9):
+        if r > 0:
+            lo, hi = y - r, y + r
+            seen |= _row2(a0, a1, a2, lo + 8) if lo < 0 else _row2(b0, b1, b2, lo)
+            seen |= _row2(c0, c1, c2, hi - 8) if hi > 7 else _row2(b0, b1, b2, hi)
+        if (seen >> np.uint64(x - r)) & ((np.uint64(1) << np.uint64(2 * r + 1)) - np.uint64(1)) != 0:
+            found = r
+            break
+    return found
+
+
+@jit
+def _band(x, r, a, width):
+    """Sites x - r..x + r (of the 12 across three words) within word a, as
+    groups of ``width`` bits, one group per site of the word's 4."""
+    lo = max(x - r - 4 * a, 0)
+    hi = min(x + r - 4 * a, 3)
+    if lo > hi:
+        return np.uint64(0)
+    ones = np.uint64(0xFFFFFFFFFFFFFFFF) >> np.uint64(64 - (hi - lo + 1) * width)
+    return ones << np.uint64(lo * width)
+
+
+@jit
+def _masks(x, r, width, repeat):
+    """Masks of sites x - r..x + r along one axis in its three words: ``_band``
+    repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
+    return (
+        _band(x, r, 0, width) * np.uint64(repeat),
+        _band(x, r, 1, width) * np.uint64(repeat),
+        _band(x, r, 2, width) * np.uint64(repeat),
+    )
+
+
+@jit
+def fine3(words, nb, i, j, k, cube):
+    """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5.
+
+    The 3x3x3 words (4x4x4 sites each, bit x + 4 y + 16 z) around the
+    walker's cover 4 sites on every side; the cube of half-width r is hit
+    when a word AND-ed with the masks of its x, y and z ranges is nonzero.
+    Whole words at a time, and a bisection over r: three rounds at most.
+    """
+    bx, by, bz = i >> 2, j >> 2, k >> 2
+    inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
+    any_set = np.uint64(0)
+    for c in range(3):
+        for b in range(3):
+            row = bx - 1 + nb * (by + b - 1 + nb * (bz + c - 1))
+            for a in range(3):
+                # away from the grid's faces, no bounds to check
+                w = words[row + a] if inside else word_at(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+                cube[a + 3 * (b + 3 * c)] = w
+                any_set |= w
+    if any_set == 0:
+        return 5
+    x = (i & 3) + 4
+    y = (j & 3) + 4
+    z = (k & 3) + 4
+    lo, hi = 0, 5  # the distance (5: none within 4) is in lo..hi
+    while lo < hi:
+        r = (lo + hi) >> 1
+        mx0, mx1, mx2 = _masks(x, r, 1, 0x1111111111111111)
+        my0, my1, my2 = _masks(y, r, 4, 0x0001000100010001)
+        mz0, mz1, mz2 = _masks(z, r, 16, 1)
+        hit = np.uint64(0)
+        for c in range(3):
+            mz = mz0 if c == 0 else (mz1 if c == 1 else mz2)
+            for b in range(3):
+                myz = mz & (my0 if b == 0 else (my1 if b == 1 else my2))
+                w = 3 * (b + 3 * c)
+                hit |= myz & ((cube[w] & mx0) | (cube[w + 1] & mx1) | (cube[w + 2] & mx2))
+        if hit != 0:
+            hi = r
+        else:
+            lo = r + 1
+    return lo

@@ -1,0 +1,93 @@
+"""What both growth kernels share: their typed inputs, the outcome and seed
+codes, the sticking rule and the checkpoint clock.
+
+The codes are positions in ``dlasweep.params``' tuples, made module-level
+integers here so that numba freezes them into the kernels as constants.
+"""
+
+from collections import namedtuple
+
+from .._jit import clock, inline, jit
+from ..params import SEED_SHAPES, STATUSES
+from .walk import xo
+
+OK = STATUSES.index("ok")
+BOUNDARY = STATUSES.index("boundary")
+STEP_LIMIT = STATUSES.index("step_limit")
+EXHAUSTED = STATUSES.index("exhausted")
+
+POINT = SEED_SHAPES.index("point")
+BLOCK = SEED_SHAPES.index("block")
+LINE = SEED_SHAPES.index("line")
+
+Model = namedtuple("Model", [
+    "dim", "neighbours", "stickiness", "seed_shape", "size", "launch_box", "launch_factor", "launch_margin",
+    "kill_factor", "exact_return", "kill", "jumps", "step", "walkers", "max_steps",
+])
+Model.__doc__ = """The resolved model parameters as the kernels take them (a numba named tuple).
+
+Named as in ``dlasweep.params``; ``seed_shape`` is its code (``POINT``,
+``BLOCK``, ``LINE``), ``launch_box`` whether ``launch`` is ``box``.
+``exact_return`` and ``kill`` are what ``kill_factor`` means for the walk,
+derived once (``model_from``): a walker beyond the launch circle returns to it
+exactly, or is killed beyond ``kill_factor`` times its radius, or neither
+(a box kills at its walls).
+"""
+
+
+def model_from(p) -> Model:
+    """The kernels' ``Model`` from a dict that ``dlasweep.params.resolve`` returned."""
+    launch_box = p["launch"] == "box"
+    boxed = p["size"] > 0 and p["seed_shape"] != "line"
+    return Model(
+        dim=int(p["dim"]), neighbours=int(p["neighbours"]), stickiness=float(p["stickiness"]),
+        seed_shape=SEED_SHAPES.index(p["seed_shape"]), size=int(p["size"]), launch_box=bool(launch_box),
+        launch_factor=float(p["launch_factor"]), launch_margin=float(p["launch_margin"]),
+        kill_factor=float(p["kill_factor"]),
+        # without a kill circle, walkers beyond the launch circle (line) return to it
+        # exactly, unless the box's walls absorb them first or they start on them
+        exact_return=bool(p["kill_factor"] == 0.0 and not launch_box and not boxed),
+        kill=bool(p["kill_factor"] > 0.0 and not launch_box),
+        jumps=bool(p["jumps"]), step=float(p["step"]), walkers=int(p["walkers"]), max_steps=int(p["max_steps"]),
+    )
+
+
+@jit
+def sticks(stickiness, rng):
+    """The sticking rule: a walker at contact sticks with probability
+    ``stickiness``, drawn from the numpy Generator ``rng``; at 1 nothing is drawn."""
+    return stickiness >= 1.0 or rng.random() < stickiness
+
+
+@inline
+def sticks_xo(stickiness, s0, s1, s2, s3):
+    """``sticks`` with the draw from the xoshiro256+ stream held in registers
+    (``walk.xo``): whether it sticks, and the stream's new state.
+
+    Inlined into the lattice walk's hot loop; written with one return, as
+    with two numba's inlining made that loop 20% slower.
+    """
+    stuck = True
+    if stickiness < 1.0:
+        s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+        stuck = u < stickiness
+    return stuck, s0, s1, s2, s3
+
+
+@jit
+def checkpoint(marks, times, passed, count, t0):
+    """Record the clock for every mark that ``count`` particles reach; returns
+    how many marks have passed (the caller passes it back in)."""
+    while passed < len(marks) and marks[passed] <= count:
+        times[passed] = clock() - t0
+        passed += 1
+    return passed
+
+
+def grown(points, steps, count, status, times):
+    """A kernel's result as ``dlasweep.grow`` takes it: the first ``count``
+    points and diffusion times (copied when growth stopped short, so that
+    the unused tail is freed), the status code and the times."""
+    if count < len(points):
+        points, steps = points[:count].copy(), steps[:count].copy()
+    return points, steps, int(status), times

@@ -1,0 +1,78 @@
+"""Off-lattice DLA: unit-diameter disks (2D) and spheres (3D).
+
+Two particles touch when their centres are exactly one diameter apart.
+
+- ``cells``: the cell list and the hierarchical maps, which bound the free
+  distance of a walker from below;
+- ``contact``: the exact ray cast to contact, the Gaussian steps and the
+  rebound of a walker that did not stick;
+- ``grow``: the walk from release to contact, attachment, the lockstep
+  walkers, and ``grow_offlattice``, the entry point.
+
+Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
+uniformly onto the sphere whose radius is a lower bound on its free
+distance: near the cluster a coarse Chebyshev distance field, elsewhere the
+largest clear level of the dilated maps, each refined by the walker's place
+in its cell, and the bounding circle of the cluster. Outside the launch
+circle it returns exactly (``walk.return_to_sphere``; above a substrate's
+launch line, ``walk.return_to_plane``).
+
+Near the cluster, exact nearest distances come from the cell list, cached
+as a neighbour list around an anchor point. When the free distance (surface
+gap) drops below ``EPS`` the walker moves by ``RAY`` along a uniform
+direction with an exact ray cast, so it stops exactly at contact (centre
+distance 1 to rounding, never less) and never passes through a branch. The
+contact point is biased by O(EPS).
+
+``step > 0`` replaces the end game by fixed Gaussian steps with an end-point
+overlap check (``contact.gauss_move``), the naive scheme, kept to show where
+it fails.
+
+Rules where the model table leaves a choice:
+
+* Stickiness: at each contact the walker sticks with probability s; if not,
+  it moves away by a ray-cast move of length ``REJECT`` = 1 along a uniform
+  direction of the outward half-space (step > 0: it stays at the contact and
+  takes its next Gaussian step from there).
+* Box (size > 0): absorbing walls at +-size/2 (a walker within ``EPS`` of a
+  wall is removed). Circle launch stops with ``boundary`` when the launch
+  circle comes within one diameter of the walls; box launch releases walkers
+  uniformly on the surface one diameter inside the walls and stops with
+  ``boundary`` when a particle centre comes within 2 of the walls.
+  ``kill_factor`` is ignored with box launch (the walls kill).
+* Substrate (seed_shape line): centres touch it at up-coordinate 0; periodic
+  sides of width ``size`` (stored coordinates in [0, size)). Circle launch:
+  launch line/plane at launch_factor*h_max + launch_margin, no ceiling. Box
+  launch: walkers released at height size-1, absorbing ceiling at size,
+  ``boundary`` when h_max >= size - 2.
+* walkers > 1: walkers start uniformly in the box (not overlapping the seed),
+  take single steps in turn (length 1 with a ray cast, or Gaussian), and are
+  removed at the walls; a walker found overlapping a newly attached particle
+  merges into it (is removed).
+* step > 0 with jumps: walk-on-spheres while the free distance exceeds
+  ``GAUSS_JUMP * step``, fixed Gaussian steps nearer than that.
+
+Random numbers: the numpy Generator passed in seeds a xoshiro256+ stream
+kept in registers for the walk's directions; the Generator itself draws the
+exact returns, stickiness and Gaussian steps. Both are deterministic given
+the Generator, so a cluster is a function of its seed.
+
+Memory: besides the points (16 or 24 bytes each), the diffusion times (8)
+and the cell-list links (4), the grids take about a bit per unit cell
+(maps), a byte per cell of side ``2**FS`` (field) and 4 bytes per tile of
+64 cell-list cells (directory) over a square ``GROW`` times the cluster's
+extent, and 256 bytes per tile that holds particles. When the cluster outgrows them they are
+dropped before the larger ones are built, so the two are never held at once.
+
+Speed note: helpers that take arrays and branch must not be called from the
+hot loop (numba then wraps each call in atomic NRT incref/decref, which cost
+a third of the run time); the hot loop in ``grow._walk`` therefore takes the map
+query, the direction draw, the gather of the neighbour list and the ray cast
+from helpers that numba inlines (``cells.walk_bound``, ``walk.xdir``,
+``cells.gather``, ``contact.ray_to``), and calls out only for rare events.
+"""
+
+from .contact import EPS
+from .grow import grow_offlattice
+
+__all__ = ["EPS", "grow_offlattice"]

@@ -1,0 +1,404 @@
+"""The off-lattice grid: a cell list of the particles and the hierarchical maps.
+
+A cell list (cells of side 2 in tiles of 64 cells, allocated only where
+particles are, so memory follows the cluster) answers which particles lie
+near a point (``gather``). The dilated maps of ``maps`` (levels 1 and up:
+unit-cell occupancy is never needed off-lattice) and a coarse Chebyshev
+distance field (a byte per cell of side ``2**FS``, capped at ``FCAP`` cells)
+bound the distance to the nearest particle from below (``map_dist``).
+
+The grid's geometry is two small arrays built by ``_layout``:
+
+gi: 0-2 index cells per axis, 3-5 tiles per axis, 6-8 map offsets,
+    9 map width, 10-12 periodic axes, 13 tile bits, 14 tiles used,
+    15 largest usable map level, 16 covered half-width (point) or height (line),
+    17 distance field cap (coarse cells)
+gf: 0-2 index origin, 3-5 index inverse cell side, 6 period
+
+A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
+field)`` that ``build_grid`` returns.
+"""
+
+import numpy as np
+
+from ..._jit import inline, jit
+from .. import maps
+
+LINE_PAD = 32
+"""Periodic images are marked in the maps up to this distance (line seed)."""
+FS = maps.FIELD_SHIFT
+"""The distance field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
+FCAP = (16, 4)
+"""Cap of the distance field (coarse cells), 2D and 3D; beyond it the maps
+bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap."""
+GROW = 1.3
+"""Growth factor of the grids when the cluster outgrows them."""
+INF = np.inf
+
+
+@jit
+def _layout(dim, line, size, need):
+    """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
+    for point seeds, h_max for a substrate), with room to grow."""
+    gi = np.zeros(18, np.int64)
+    gf = np.zeros(8)
+    tb = 3 if dim == 2 else 2
+    gi[13] = tb
+    up = dim - 1
+    gf[6] = float(size)
+    if not line:
+        half = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
+        if size > 0:
+            half = min(half, ((size // 2 + 8) // 16 + 1) * 16)
+        gi[16] = half
+        gi[9] = 2 * half
+        gi[15] = 1 << 30
+        gi[17] = FCAP[dim - 2]
+        for a in range(dim):
+            gi[a] = half
+            gi[6 + a] = half
+            gf[a] = -float(half)
+            gf[3 + a] = 0.5
+    else:
+        top = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
+        gi[16] = top
+        gi[9] = max(size + 2 * LINE_PAD, top + 2)
+        gi[15] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
+        gi[17] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
+        m = size // 2
+        for a in range(up):
+            gi[a] = m
+            gi[6 + a] = LINE_PAD
+            gi[10 + a] = 1
+            gf[a] = 0.0
+            gf[3 + a] = m / float(size)
+        gi[up] = (top + 2) // 2 + 1
+        gi[6 + up] = 2
+        gf[up] = -2.0
+        gf[3 + up] = 0.5
+    for a in range(3):
+        if a >= dim:
+            gi[a] = 1
+            gi[3 + a] = 1
+        else:
+            gi[3 + a] = (gi[a] + (1 << tb) - 1) >> tb
+    return gi, gf
+
+
+@jit
+def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
+    """Push particle i on its cell's list; returns heads (grown if needed)."""
+    c0 = min(max(int(np.floor((pts[i, 0] - gf[0]) * gf[3])), 0), gi[0] - 1)
+    c1 = min(max(int(np.floor((pts[i, 1] - gf[1]) * gf[4])), 0), gi[1] - 1)
+    c2 = 0
+    if dim == 3:
+        c2 = min(max(int(np.floor((pts[i, 2] - gf[2]) * gf[5])), 0), gi[2] - 1)
+    tb = gi[13]
+    m = (1 << tb) - 1
+    t = (c0 >> tb) + gi[3] * ((c1 >> tb) + gi[4] * (c2 >> tb))
+    loc = (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
+    tile = dirr[t]
+    if tile < 0:
+        tile = gi[14]
+        gi[14] += 1
+        if (tile + 1) * 64 > len(heads):
+            bigger = maps.filled(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
+            bigger[: len(heads)] = heads
+            heads = bigger
+        dirr[t] = tile
+    h = tile * 64 + loc
+    nxt[i] = heads[h]
+    heads[h] = i
+    return heads
+
+
+@jit
+def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
+    """Mark particle i in the maps and the field, with its periodic images
+    near the edges."""
+    W = gi[9]
+    reach = 1 if gi[10] == 1 else 0
+    reach2 = reach if dim == 3 else 0
+    for a in range(-reach, reach + 1):
+        for b in range(-reach2, reach2 + 1):
+            i0 = int(np.floor(pts[i, 0] + a * size)) + gi[6]
+            i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[7]
+            i2 = int(np.floor(pts[i, 2])) + gi[8] if dim == 3 else 0
+            if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
+                # a coarse cell that already holds a particle has every level from
+                # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
+                fw = (W + (1 << FS) - 1) >> FS
+                ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
+                fresh = field[ci + fw * (cj + fw * ck)] != 0
+                _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
+                if fresh:
+                    maps.field_lower(field, dim, fw, gi[17], ci, cj, ck)
+
+
+@jit
+def _allocate_maps(dim, width):
+    """The dilated maps of ``maps`` for a grid of side ``width``, levels 1 and up.
+
+    Level 0 (plain occupancy, a bit per unit cell and three quarters of the
+    bits) is never queried here: contacts come from the cell list. ``start``
+    is shifted so that level s still begins at ``start[s]``.
+    """
+    start, blocks, cells = maps.layout(dim, width)
+    start -= start[min(1, len(cells) - 1)]
+    return maps.filled(start[-1], 0, np.uint64), start, blocks, cells
+
+
+@jit
+def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
+    """Set cell (i, j, k) and its neighbours in the dilated levels 1 to top - 1."""
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    for s in range(1, top):
+        w = cells[s]
+        nb = blocks[s]
+        ci, cj, ck = i >> s, j >> s, k >> s
+        klo, khi = (max(ck - 1, 0), min(ck + 1, w - 1)) if dim == 3 else (0, 0)
+        for c in range(klo, khi + 1):
+            for b in range(max(cj - 1, 0), min(cj + 1, w - 1) + 1):
+                for a in range(max(ci - 1, 0), min(ci + 1, w - 1) + 1):
+                    q = start[s] + (a >> bs) + nb * ((b >> bs) + nb * (c >> bs))
+                    words[q] |= np.uint64(1) << np.uint64((a & bm) | ((b & bm) << bs) | ((c & bm) << (2 * bs)))
+
+
+@jit
+def build_grid(dim, line, size, need, pts, count, nxt, tiles):
+    """Maps and cell list for particles 0..count-1, sized for ``need``, with
+    room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
+    gi, gf = _layout(dim, line, size, need)
+    words, start, blocks, cells = _allocate_maps(dim, gi[9])
+    ntiles = gi[3] * gi[4] * gi[5]
+    dirr = maps.filled(ntiles, -1, np.int32)
+    heads = maps.filled(64 * (tiles + tiles // 4 + 64), -1, np.int32)
+    field = maps.filled(((gi[9] + (1 << FS) - 1) >> FS) ** dim, gi[17], np.uint8)
+    for i in range(count):
+        heads = insert(i, pts, nxt, dim, gi, gf, dirr, heads)
+        mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
+    return gi, gf, words, start, blocks, cells, dirr, heads, field
+
+
+@jit
+def face_gap(X0, X1, X2, dim, s):
+    """Distance from the grid point X to the nearest face of its cell of side ``2**s``.
+
+    Scalars only, so that the walk's hot loop pays no reference counting.
+    """
+    side = float(1 << s)
+    c = float((int(X0) >> s) << s)
+    f = min(X0 - c, c + side - X0)
+    c = float((int(X1) >> s) << s)
+    f = min(f, X1 - c, c + side - X1)
+    if dim == 3:
+        c = float((int(X2) >> s) << s)
+        f = min(f, X2 - c, c + side - X2)
+    return f
+
+
+@jit
+def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
+    """Lower bound on the centre distance from w to every particle, from the
+    distance field and the maps.
+
+    A field value d > 1 puts every particle centre d - 1 whole coarse cells
+    beyond w's coarse cell, so (d - 1) 2**FS plus w's distance to its own
+    coarse cell's faces bounds it. Where the field says little (d <= 1, or at
+    its cap), the largest clear map level s puts every particle outside the
+    3**dim block of level-s cells around w: 2**s plus w's distance to its
+    level-s cell's faces. Returns 0 when the level-1 cell is set (look
+    closer), -1 off the map. (``_walk`` spells this out inline.)
+    """
+    W = gi[9]
+    x0 = w[0]
+    x1 = w[1]
+    if gi[10] == 1:
+        x0 = x0 - size * np.floor(x0 / size)
+        if dim == 3:
+            x1 = x1 - size * np.floor(x1 / size)
+    X0 = x0 + gi[6]
+    X1 = x1 + gi[7]
+    X2 = w[2] + gi[8] if dim == 3 else 0.0
+    if not (0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W):
+        return -1.0
+    i0, i1, i2 = int(X0), int(X1), int(X2)
+    fw = (W + (1 << FS) - 1) >> FS
+    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+    dm = 0.0
+    if fd > 1:
+        side = float(1 << FS)
+        f = face_gap(X0, X1, X2, dim, FS)
+        dm = (fd - 1) * side + f
+    if 1 < fd < gi[17]:
+        return dm
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
+    while hi - lo > 1:
+        s = (lo + hi) >> 1
+        j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
+        nb = blocks[s]
+        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+        if (word >> np.uint64((j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs)))) & np.uint64(1):
+            hi = s
+        else:
+            lo = s
+    s = lo
+    if s == 0:
+        return dm
+    side = float(1 << s)
+    f = face_gap(X0, X1, X2, dim, s)
+    return max(dm, side + f)
+
+
+@jit
+def walk_geometry(gi, cells, dim):
+    """The grid's constants that ``walk_bound`` takes, worked out once per walk:
+    (periodic, m0, m1, m2, W, fw, fcap, flo, ftop)."""
+    ftop = min(len(cells) - 1, gi[15]) + 1
+    fcap = gi[17]
+    # a field at its cap puts every particle (cap - 1) coarse cells away, so
+    # the map levels whose 3**dim blocks fit inside that are clear
+    flo = 1
+    while flo + 1 < ftop and (2 << (flo + 1)) <= (fcap - 1) << FS:
+        flo += 1
+    fw = (gi[9] + (1 << FS) - 1) >> FS
+    return gi[10] == 1, float(gi[6]), float(gi[7]), float(gi[8]), float(gi[9]), fw, fcap, flo, ftop
+
+
+@jit
+def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, fcap, flo, ftop):
+    """``map_dist`` as the walk's hot loop computes it: the grid's constants
+    from ``walk_geometry``, and w's periodic coordinates wrapped in place.
+
+    ``grow._walk`` holds a copy of this body, spelled out (a call would cost
+    reference counting, and numba's inlining cost as much).
+
+    It searches the map levels only where the field leaves them open: a
+    particle within two coarse cells sets every level from 3 up, and at the
+    field's cap the levels up to ``flo`` are clear. A test holds it to
+    ``map_dist`` on random grids.
+    """
+    fside = float(1 << FS)
+    bs = 3 if dim == 2 else 2
+    bm = (1 << bs) - 1
+    x0 = w[0]
+    x1 = w[1]
+    if per:
+        x0 = x0 - size * np.floor(x0 / size)
+        w[0] = x0
+        if dim == 3:
+            x1 = x1 - size * np.floor(x1 / size)
+            w[1] = x1
+    X0 = x0 + m0
+    X1 = x1 + m1
+    X2 = w[2] + m2 if dim == 3 else 0.0
+    dm = -1.0
+    if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
+        i0, i1, i2 = int(X0), int(X1), int(X2)
+        fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+        dm = 0.0
+        if fd > 1:
+            # no particle in the coarse cells within fd - 1 of the walker's
+            f = face_gap(X0, X1, X2, dim, FS)
+            dm = (fd - 1) * fside + f
+        lo, hi = 0, 0
+        if fd <= 1:
+            hi = min(ftop, 3)
+        elif fd >= fcap:
+            lo, hi = flo, ftop
+        while hi - lo > 1:
+            s = (lo + hi) >> 1
+            j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
+            nb = blocks[s]
+            word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+            bit = (j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs))
+            if (word >> np.uint64(bit)) & np.uint64(1):
+                hi = s
+            else:
+                lo = s
+        if lo > 0:
+            side = float(1 << lo)
+            f = face_gap(X0, X1, X2, dim, lo)
+            dm = max(dm, side + f)
+    return dm
+
+
+@inline
+def _span(v, r, nc, periodic, origin, inv):
+    """Index cells covering [v - r, v + r] on one axis (may wrap if periodic)."""
+    lo = int(np.floor((v - r - origin) * inv))
+    hi = int(np.floor((v + r - origin) * inv))
+    if periodic:
+        return lo, min(hi, lo + nc - 1)
+    return max(lo, 0), min(hi, nc - 1)
+
+
+@inline
+def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
+    """Particles with centres within r of point c, as the images nearest c.
+
+    Fills lx, ly, lz (coordinates) and li (indices); returns the count and
+    the smallest squared centre distance among them (inf when none). Inlined,
+    so that the walk's hot loop pays no reference counting for its arrays.
+    """
+    r2 = r * r
+    nl = 0
+    near2 = INF
+    lo0, hi0 = _span(c[0], r, gi[0], gi[10] == 1, gf[0], gf[3])
+    lo1, hi1 = _span(c[1], r, gi[1], gi[11] == 1, gf[1], gf[4])
+    lo2, hi2 = 0, 0
+    if dim == 3:
+        lo2, hi2 = _span(c[2], r, gi[2], False, gf[2], gf[5])
+    p0 = gi[10] == 1
+    p1 = gi[11] == 1
+    n0, n1, t0, t1 = gi[0], gi[1], gi[3], gi[4]
+    tb = gi[13]
+    m = (1 << tb) - 1
+    half = 0.5 * size
+    for k2 in range(lo2, hi2 + 1):
+        for k1 in range(lo1, hi1 + 1):
+            c1 = k1 % n1 if p1 else k1
+            for k0 in range(lo0, hi0 + 1):
+                c0 = k0 % n0 if p0 else k0
+                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))]
+                if tile < 0:
+                    continue
+                h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))]
+                while h >= 0:
+                    d0 = pts[h, 0] - c[0]
+                    d1 = pts[h, 1] - c[1]
+                    d2 = pts[h, 2] - c[2] if dim == 3 else 0.0
+                    if p0:
+                        if d0 > half:
+                            d0 -= size
+                        elif d0 < -half:
+                            d0 += size
+                    if p1:
+                        if d1 > half:
+                            d1 -= size
+                        elif d1 < -half:
+                            d1 += size
+                    q = d0 * d0 + d1 * d1 + d2 * d2
+                    if q < r2 and nl < len(lx):
+                        lx[nl] = c[0] + d0
+                        ly[nl] = c[1] + d1
+                        lz[nl] = c[2] + d2
+                        li[nl] = h
+                        nl += 1
+                        near2 = min(near2, q)
+                    h = nxt[h]
+    return nl, near2
+
+
+
+@jit
+def no_grid():
+    """An empty grid: the caller drops its old grid's arrays by taking this
+    before it builds the new one, so the two are never held at once."""
+    z = np.zeros(1, np.int64)
+    return (np.zeros(18, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
+            np.zeros(0, np.int32), np.zeros(0, np.uint8))
+

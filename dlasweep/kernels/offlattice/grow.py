@@ -1,0 +1,550 @@
+"""Off-lattice growth: the walk of one walker from release to contact, the
+attachment of particles, and the lockstep walkers.
+
+Far from the cluster a walker moves by walk-on-spheres jumps onto the
+sphere whose radius is a lower bound on its free distance (``cells``:
+field, maps, and the cluster's bounding circle). Near it, exact nearest
+distances come from a neighbour list of radius ``LIST_RADIUS`` gathered
+around an anchor point: while the walker stays near the anchor its free
+distance is a minimum over a handful of centres. Inside the ``EPS`` shell
+it moves by ``RAY`` with an exact ray cast (``contact``).
+"""
+
+import numpy as np
+
+from ..._jit import clock, jit
+from .. import maps
+from .. import model as codes
+from ..model import checkpoint, grown, model_from, sticks
+from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
+from .cells import (
+    FS,
+    INF,
+    build_grid,
+    face_gap,
+    gather,
+    insert,
+    map_dist,
+    mark,
+    no_grid,
+    walk_geometry,
+)
+from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
+
+LIST_RADIUS = 3.0
+"""Radius (centre distance) of the cached neighbour list. Longer lists give
+longer exact jumps and serve longer, but a gather visits (r + 1)**dim cells
+of linked lists: side by side at 2D 1e6, radius 6 took 99 steps per particle
+against 107 at radius 3, in the same time (15.2 against 15.5 s, two rounds),
+and radius 4 made 3D 1e5 slower (4.2 against 3.0 s)."""
+LCAP = 1024
+"""Capacity of the neighbour lists (a packing within radius 6 in 2D or 3 in
+3D holds < 200)."""
+GAUSS_JUMP = 4.0
+"""With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
+
+
+@jit
+def _neighbour_list():
+    """Empty arrays for ``cells.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
+    return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
+
+
+@jit
+def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi,
+          pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, geo, rs, rng):
+    """Release walkers until one sticks or the step budget runs out.
+
+    Parameters
+    ----------
+    model : Model
+        The model (``kernels.model.Model``).
+    launch_r, kill_r : float
+        Launch radius (height above a substrate) and kill radius now.
+    total, pending : int
+        Steps taken in all, and since the last attachment.
+    w : float64 (3,)
+        Receives the walker's place where it sticks.
+    rs : uint64 (4,)
+        The xoshiro256+ stream; ``rng`` the numpy Generator.
+    The rest: scratch arrays, the neighbour lists and the grid (``cells``);
+    ``geo`` holds r_max, the Chebyshev extent and h_max.
+
+    Returns
+    -------
+    stuck : bool
+        True when a walker stuck at w, False when the budget ran out.
+    total, pending : int
+
+    Every array is an argument (borrowed, no reference counting) and the hot
+    path calls no array-taking helper that numba does not inline; see the
+    package note.
+    """
+    dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
+    jumps, max_steps, ret, kill = model.jumps, model.max_steps, model.exact_return, model.kill
+    line = model.seed_shape == codes.LINE
+    launch_box = model.launch_box
+    boxed = size > 0 and not line
+    ceiling = line and launch_box
+    hb = 0.5 * size
+    launch_r2 = launch_r * launch_r
+    RL = LIST_RADIUS
+    if line:
+        RL = min(RL, hb)  # a ball of radius <= size/2 holds one image of each particle
+    RL2 = RL * RL
+    up = dim - 1
+    r_max, extent, h_max = geo[0], geo[1], geo[2]
+    per, m0, m1, m2, W, fw, fcap, flo, ftop = walk_geometry(gi, cells, dim)
+    s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+    code = 0
+    while code == 0:
+        # ---- release
+        if launch_box:
+            if line:
+                for a in range(up):
+                    w[a] = rng.random() * size
+                w[up] = size - 1.0
+            else:
+                face = int(rng.random() * 2 * dim)
+                for a in range(dim):
+                    w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
+                w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
+        elif line:
+            for a in range(up):
+                w[a] = rng.random() * size
+            w[up] = launch_r
+        else:
+            s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+            w[0] = launch_r * u0
+            w[1] = launch_r * u1
+            w[2] = launch_r * u2
+        list_ok = False
+        nl = 0
+        while True:
+            if max_steps > 0 and total >= max_steps:
+                code = 2
+                break
+            # ---- outer boundaries: exact return, kill sphere, walls
+            if line:
+                h = w[up]
+                if ret and h > launch_r:
+                    return_to_plane(rng, dim, w, launch_r, size)
+                    total += 1
+                    pending += 1
+                    list_ok = False
+                    continue
+                gb = INF
+                if kill:
+                    gb = kill_r - h
+                if ceiling:
+                    gb = min(gb, size - h)
+                ggeo = h - h_max - 1.0
+            else:
+                r2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+                if ret and r2 > launch_r2 * (1.0 + 1e-12):  # returned walkers sit on launch_r, to rounding
+                    total += 1
+                    pending += 1
+                    list_ok = False
+                    if not return_to_sphere(rng, dim, w, launch_r, scratch):
+                        break  # escaped (3D): release a new walker
+                    continue
+                r = np.sqrt(r2)
+                gb = INF
+                if kill:
+                    gb = kill_r - r
+                ch = max(abs(w[0]), abs(w[1]), abs(w[2]))
+                if boxed:
+                    gb = min(gb, hb - ch)
+                ggeo = max(r - r_max, ch - extent) - 1.0
+            if gb < EPS:
+                break  # absorbed: release a new walker
+            # ---- free distance g: a lower bound, exact near the cluster
+            exact = False
+            g = 0.0
+            if list_ok:
+                d0 = w[0] - anchor[0]
+                d1 = w[1] - anchor[1]
+                d2 = w[2] - anchor[2]
+                dout = RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                dl2 = INF
+                for k in range(nl):
+                    d0 = w[0] - lx[k]
+                    d1 = w[1] - ly[k]
+                    d2 = w[2] - lz[k]
+                    dl2 = min(dl2, d0 * d0 + d1 * d1 + d2 * d2)
+                if dout > 0.0 and dl2 <= dout * dout:
+                    g = np.sqrt(dl2) - 1.0
+                    exact = True
+                else:
+                    list_ok = False
+            if not exact:
+                # >>> walk_bound, spelled out: inlined by numba it made the walk 13% slower (a test
+                # holds the two texts together, and walk_bound to map_dist)
+                fside = float(1 << FS)
+                bs = 3 if dim == 2 else 2
+                bm = (1 << bs) - 1
+                x0 = w[0]
+                x1 = w[1]
+                if per:
+                    x0 = x0 - size * np.floor(x0 / size)
+                    w[0] = x0
+                    if dim == 3:
+                        x1 = x1 - size * np.floor(x1 / size)
+                        w[1] = x1
+                X0 = x0 + m0
+                X1 = x1 + m1
+                X2 = w[2] + m2 if dim == 3 else 0.0
+                dm = -1.0
+                if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
+                    i0, i1, i2 = int(X0), int(X1), int(X2)
+                    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+                    dm = 0.0
+                    if fd > 1:
+                        # no particle in the coarse cells within fd - 1 of the walker's
+                        f = face_gap(X0, X1, X2, dim, FS)
+                        dm = (fd - 1) * fside + f
+                    lo, hi = 0, 0
+                    if fd <= 1:
+                        hi = min(ftop, 3)
+                    elif fd >= fcap:
+                        lo, hi = flo, ftop
+                    while hi - lo > 1:
+                        s = (lo + hi) >> 1
+                        j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
+                        nb = blocks[s]
+                        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+                        bit = (j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs))
+                        if (word >> np.uint64(bit)) & np.uint64(1):
+                            hi = s
+                        else:
+                            lo = s
+                    if lo > 0:
+                        side = float(1 << lo)
+                        f = face_gap(X0, X1, X2, dim, lo)
+                        dm = max(dm, side + f)
+                # <<< walk_bound
+                if dm > 0.0:
+                    g = max(ggeo, dm - 1.0)
+                elif dm < 0.0:
+                    g = ggeo
+                else:
+                    # the neighbour list around w, and the nearest distance
+                    anchor[0] = w[0]
+                    anchor[1] = w[1]
+                    anchor[2] = w[2]
+                    list_ok = True
+                    nl, dl2 = gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+                    g = (np.sqrt(dl2) if dl2 < RL2 else RL) - 1.0
+            if line:
+                g = min(g, w[up])
+            g = min(g, gb)
+            # ---- move
+            if step == 0.0 and jumps and g >= EPS:
+                # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
+                # holds the copies together): one condition for both timed 25% slower at
+                # 2D 1e6 once (even at 3e5, on a loaded machine), so the tested shape stays
+                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                w[0] += g * u0
+                w[1] += g * u1
+                w[2] += g * u2
+                total += 1
+                pending += 1
+                # <<< jump
+                continue
+            contact = False
+            if step == 0.0 and jumps:
+                # inside the shell: a short exact ray cast against the list
+                d0 = w[0] - anchor[0]
+                d1 = w[1] - anchor[1]
+                d2 = w[2] - anchor[2]
+                if not list_ok or RL - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) < 1.0 + RAY + 1e-9:
+                    anchor[0] = w[0]
+                    anchor[1] = w[1]
+                    anchor[2] = w[2]
+                    nl = gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
+                    list_ok = True
+                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                total += 1
+                pending += 1
+                best, hit = ray_to(w, u0, u1, u2, RAY, nl, lx, ly, lz, line, dim)
+                u[0], u[1], u[2] = u0, u1, u2
+                if hit == -1:
+                    for a in range(3):
+                        w[a] += best * u[a]
+                    continue
+                settle(w, u, best, hit, dim, lx, ly, lz, normal)  # once per contact: a call is cheap here
+                contact = True
+            elif step == 0.0:
+                # single unit steps everywhere (jumps=false)
+                s0, s1, s2, s3, u[0], u[1], u[2] = xdir(s0, s1, s2, s3, dim)
+                total += 1
+                pending += 1
+                if g > 1.0:
+                    for a in range(3):
+                        w[a] += u[a]
+                    continue
+                contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
+            else:
+                if jumps and g > GAUSS_JUMP * step:
+                    # >>> jump
+                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                    w[0] += g * u0
+                    w[1] += g * u1
+                    w[2] += g * u2
+                    total += 1
+                    pending += 1
+                    # <<< jump
+                    continue
+                total += 1
+                pending += 1
+                list_ok = False
+                if gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
+                              blocks, cells, field, mx, my, mz, mi, scratch, u, normal) and sticks(stickiness, rng):
+                    code = 1
+                    break
+                continue
+            if not contact:
+                continue
+            rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+            stuck, moves = rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads,
+                                   mx, my, mz, mi)
+            s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+            total += moves
+            pending += moves
+            list_ok = False
+            if stuck:
+                code = 1
+                break
+    rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+    return code == 1, total, pending
+
+
+@jit
+def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
+    """Add the walker at w to the cluster; returns the new count, the grid
+    and, when the cluster outgrew the grid, its count of cell-list tiles,
+    else -1 (then the particle is not yet in the grid: the caller drops it
+    and builds a larger one)."""
+    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+    up = dim - 1
+    if line:
+        for a in range(up):
+            w[a] = w[a] - size * np.floor(w[a] / size)
+            if w[a] >= size:
+                w[a] -= size
+    r2 = 0.0
+    ch = 0.0
+    for a in range(dim):
+        pts[count, a] = w[a]
+        r2 += w[a] * w[a]
+        ch = max(ch, abs(w[a]))
+    steps[count] = pending
+    geo[0] = max(geo[0], np.sqrt(r2))
+    geo[1] = max(geo[1], ch)
+    geo[2] = max(geo[2], w[up])
+    count += 1
+    need = geo[2] if line else geo[1]
+    if need + 8.0 > gi[16]:
+        return count, grid, gi[14]
+    heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
+    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
+    return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
+
+
+@jit
+def _grow(n, model, marks, rng, times):
+    """Grow an off-lattice cluster of up to ``n`` particles.
+
+    Parameters
+    ----------
+    n : int
+    model : Model
+        The model (``kernels.model.Model``).
+    marks : int64 (K,)
+        Particle counts at which to read the clock, ascending.
+    rng : numpy.random.Generator
+    times : float64 (K,)
+        Filled with the seconds at each mark as it passes.
+
+    Returns
+    -------
+    points : float64 (n, dim), the first ``count`` rows grown
+    steps : int64 (n,)
+    count : int
+    status : int, a code of ``dlasweep.params.STATUSES``
+    """
+    t0 = clock()
+    dim, seed_shape, size = model.dim, model.seed_shape, model.size
+    line = seed_shape == codes.LINE
+    nseed = 0 if line else (1 if seed_shape == codes.POINT else 1 << dim)
+    cap = max(n, 1)
+    pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
+    steps = maps.filled(cap, 0, np.int64)
+    nxt = maps.filled(cap, -1, np.int32)
+    count = min(n, nseed)
+    geo = np.zeros(3)  # r_max, Chebyshev extent, h_max
+    geo[2] = -1.0
+    for q in range(count):
+        r2 = 0.0
+        for a in range(dim):
+            if seed_shape == codes.BLOCK:
+                pts[q, a] = float((q >> a) & 1)
+            r2 += pts[q, a] ** 2
+            geo[1] = max(geo[1], abs(pts[q, a]))
+        geo[0] = max(geo[0], np.sqrt(r2))
+    grid = build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
+    rs = seed_stream(rng)
+    passed = checkpoint(marks, times, 0, count, t0)
+    if model.walkers > 1:
+        count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid)
+        return pts, steps, count, status
+    w = np.zeros(3)
+    u = np.zeros(3)
+    normal = np.zeros(3)
+    scratch = np.zeros(3)
+    anchor = np.zeros(3)
+    lx, ly, lz, li = _neighbour_list()
+    mx, my, mz, mi = _neighbour_list()
+    hb = 0.5 * size
+    boxed = size > 0 and not line
+    total = np.int64(0)
+    pending = np.int64(0)
+    status = codes.OK
+    while count < n:
+        launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
+        if model.launch_box:
+            if (line and geo[2] >= size - 2.0) or (not line and geo[1] >= hb - 2.0):
+                status = codes.BOUNDARY
+                break
+        elif boxed and launch_r > hb - 1.0:
+            status = codes.BOUNDARY
+            break
+        gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+        stuck, total, pending = _walk(model, launch_r, model.kill_factor * launch_r, total, pending, w, u, normal,
+                                      scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
+                                      blocks, cells, dirr, heads, field, geo, rs, rng)
+        if not stuck:
+            status = codes.STEP_LIMIT
+            break
+        count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+        if tiles >= 0:
+            # drop the old grid (every name of it) before building the larger one: never two at once
+            grid = no_grid()
+            gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+            grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
+        pending = 0
+        passed = checkpoint(marks, times, passed, count, t0)
+    return pts, steps, count, status
+
+
+@jit
+def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid):
+    """Grow with ``model.walkers`` walkers at once: a finite concentration.
+
+    They start uniformly in the box (not on a particle) and take single
+    steps in turn (unit ray casts, or Gaussian steps); none is relaunched, a
+    wall removes it, and one that a new particle covers merges into it.
+    Takes over from ``_grow`` once the seed is placed (its arguments are
+    ``_grow``'s state) and returns (count, status).
+    """
+    dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
+    walkers, max_steps = model.walkers, model.max_steps
+    line = model.seed_shape == codes.LINE
+    up = dim - 1
+    hb = 0.5 * size
+    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+    pos = np.zeros((walkers, 3))
+    alive = np.ones(walkers, np.bool_)
+    w = np.zeros(3)
+    u = np.zeros(3)
+    e = np.zeros(3)
+    normal = np.zeros(3)
+    mx, my, mz, mi = _neighbour_list()
+    for k in range(walkers):
+        while True:
+            for a in range(dim):
+                if line:
+                    pos[k, a] = rng.random() * size
+                else:
+                    pos[k, a] = (2.0 * rng.random() - 1.0) * hb
+            if gather(pos[k], 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi)[0] == 0:
+                break
+    live = walkers
+    total = np.int64(0)
+    pending = np.int64(0)
+    status = codes.OK
+    while count < n and status == codes.OK:
+        if live == 0:
+            status = codes.EXHAUSTED
+            break
+        for k in range(walkers):
+            if not alive[k]:
+                continue
+            if max_steps > 0 and total >= max_steps:
+                status = codes.STEP_LIMIT
+                break
+            for a in range(3):
+                w[a] = pos[k, a]
+            dm = map_dist(w, dim, size, gi, words, start, blocks, cells, field)
+            if dm == 0.0 and gather(w, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi)[0] > 0:
+                alive[k] = False  # a particle attached on top of it: merged
+                live -= 1
+                continue
+            total += 1
+            pending += 1
+            if step == 0.0:
+                unit_vector(rs, dim, u)
+                if dm > 2.0:
+                    for a in range(3):
+                        w[a] += u[a]
+                    contact = False
+                else:
+                    contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
+            else:
+                contact = gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
+                                     blocks, cells, field, mx, my, mz, mi, e, u, normal)
+            stuck = False
+            if contact:
+                if step > 0.0:
+                    stuck = sticks(stickiness, rng)
+                else:
+                    stuck, moves = rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr,
+                                           heads, mx, my, mz, mi)
+                    total += moves
+                    pending += moves
+            if stuck:
+                count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+                if tiles >= 0:
+                    grid = no_grid()
+                    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+                    grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
+                gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+                pending = 0
+                alive[k] = False
+                live -= 1
+                passed = checkpoint(marks, times, passed, count, t0)
+                if count >= n:
+                    break
+                continue
+            if line:
+                for a in range(up):
+                    w[a] = w[a] - size * np.floor(w[a] / size)
+                gone = w[up] >= size
+            else:
+                gone = max(abs(w[0]), abs(w[1]), abs(w[2])) >= hb
+            if gone:
+                alive[k] = False
+                live -= 1
+            for a in range(3):
+                pos[k, a] = w[a]
+    return count, status
+
+
+def grow_offlattice(n, p, marks, rng, times=None):
+    """Grow an off-lattice cluster; see ``dlasweep.grow`` for the meaning.
+
+    Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
+    the float64 centres of unit-diameter disks (spheres), (n_grown, dim).
+    """
+    times = np.full(len(marks), np.nan) if times is None else times
+    return grown(*_grow(int(n), model_from(p), np.asarray(marks, np.int64), rng, times), times)
