@@ -55,7 +55,7 @@ class Cluster:
 def rng_for(seed) -> np.random.Generator:
     """A PCG64 generator from an int or a ``numpy.random.SeedSequence``."""
     if not isinstance(seed, np.random.SeedSequence):
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        if not _params.is_integer(seed) or seed < 0:
             raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
         seed = np.random.SeedSequence(int(seed))
     return np.random.Generator(np.random.PCG64(seed))
@@ -93,7 +93,7 @@ def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluste
     -------
     Cluster
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+    if not _params.is_integer(n) or n < 1:
         raise ValueError(f"n: expected an integer >= 1, got {n!r}")
     p = _params.resolve(**params)
     rng = rng_for(seed)
