@@ -2,9 +2,9 @@
 
 Each computes one documented quantity the direct way, one point (one box,
 one prefix) at a time, for small inputs, reusing nothing of the package.
-The kernels' references (a naive lattice walk, brute-force distances and
-contacts, a brute-force walk-on-spheres) stay beside their tests in
-test_lattice.py, test_offlattice.py and test_models.py.
+Among them the kernels' references: a lattice walk of single steps and a
+walk-on-spheres. (Brute-force distances and contacts are one-line numpy
+expressions or k-d tree queries beside their tests.)
 """
 
 from __future__ import annotations
@@ -69,3 +69,40 @@ def max_radius(points):
     """Largest distance from the seed (the first point) of every prefix."""
     distance = np.sqrt(((np.asarray(points, float) - points[0]) ** 2).sum(axis=1))
     return np.array([distance[:k].max() for k in range(1, len(points) + 1)])
+
+
+def lattice_exits(moves, r, walks, rng):
+    """Where ``walks`` walks of single steps (``moves``, rows of unit moves) from the origin first reach
+    half-width ``r``, the square (cube) of sites with max |x_a| = r: an (walks, dim) array."""
+    x = np.zeros((walks, moves.shape[1]), np.int64)
+    alive = np.ones(walks, bool)
+    while alive.any():
+        idx = np.flatnonzero(alive)
+        x[idx] += moves[rng.integers(len(moves), size=len(idx))]
+        alive[idx] = np.abs(x[idx]).max(1) < r
+    return x
+
+
+def walk_on_spheres_exterior(dim, r0, far, n, rng, eps=1e-7):
+    """Brownian paths from radius ``r0`` by walk-on-spheres in the shell 1 < r < ``far``.
+
+    Returns where each walker stopped, projected on the unit sphere, and a
+    mask of those that reached it (within ``eps``) before ``far``.
+    """
+    x = np.zeros((n, dim))
+    x[:, 0] = r0
+    alive = np.ones(n, bool)
+    hit = np.zeros(n, bool)
+    while alive.any():
+        idx = np.flatnonzero(alive)
+        r = np.linalg.norm(x[idx], axis=1)
+        back = r - 1 < eps
+        out = r > far * (1 - 1e-9)
+        hit[idx[back]] = True
+        alive[idx[back | out]] = False
+        idx = idx[~(back | out)]
+        r = r[~(back | out)]
+        u = rng.normal(size=(len(idx), dim))
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        x[idx] += np.minimum(r - 1, far - r)[:, None] * u + 1e-12
+    return x / np.linalg.norm(x, axis=1)[:, None], hit

@@ -1,5 +1,6 @@
 """The lattice kernel's exact machinery: square/cube exit laws and their alias tables."""
 
+import naive
 import numpy as np
 import pytest
 from scipy.stats import chi2
@@ -45,15 +46,8 @@ def test_exit_law_matches_single_steps(dim, moore, r):
     one run in a thousand, a wrong one (e.g. the Brownian harmonic measure,
     which differs by several percent near corners) fails every time.
     """
-    rng = np.random.default_rng(5)
-    moves = unit_moves(dim, moore)[:, :dim]
     walks = 40_000
-    x = np.zeros((walks, dim), np.int64)
-    alive = np.ones(walks, bool)
-    while alive.any():
-        idx = np.flatnonzero(alive)
-        x[idx] += moves[rng.integers(len(moves), size=len(idx))]
-        alive[idx] = np.abs(x[idx]).max(1) < r
+    x = naive.lattice_exits(unit_moves(dim, moore)[:, :dim], r, walks, np.random.default_rng(5))
     sites, probs = exit_law(dim, moore, r)
     key = lambda s: tuple(sorted(np.abs(s)))
     classes = sorted({key(s) for s in sites})

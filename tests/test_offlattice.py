@@ -4,6 +4,7 @@ Everything is seeded, so each check is deterministic; the statistical
 tolerances below are stated where they are used.
 """
 
+import naive
 import numpy as np
 import pytest
 from scipy import stats
@@ -127,32 +128,6 @@ def test_checkpoint_times():
 # --------------------------------------------------------- exact return -----
 
 
-def _wos_exterior(dim, r0, far, n, rng, eps=1e-7):
-    """Brute force: walk-on-spheres in the shell 1 < r < far from radius r0.
-
-    Returns the hitting points on the unit sphere and a mask of the walkers
-    that got there before ``far``.
-    """
-    x = np.zeros((n, dim))
-    x[:, 0] = r0
-    alive = np.ones(n, bool)
-    hit = np.zeros(n, bool)
-    while alive.any():
-        idx = np.flatnonzero(alive)
-        r = np.linalg.norm(x[idx], axis=1)
-        back = r - 1 < eps
-        out = r > far * (1 - 1e-9)
-        hit[idx[back]] = True
-        alive[idx[back | out]] = False
-        idx = idx[~(back | out)]
-        r = r[~(back | out)]
-        u = rng.normal(size=(len(idx), dim))
-        u /= np.linalg.norm(u, axis=1)[:, None]
-        x[idx] += np.minimum(r - 1, far - r)[:, None] * u + 1e-12
-    pts = x / np.linalg.norm(x, axis=1)[:, None]
-    return pts, hit
-
-
 @pytest.fixture(scope="module")
 def numba_rng():
     return np.random.Generator(np.random.PCG64(2024))
@@ -177,7 +152,7 @@ def test_return_to_circle_matches_brownian(numba_rng):
     KS at 20 000 samples each: a 3% error in the kernel would fail it.
     """
     rng = np.random.default_rng(1)
-    brute, hit = _wos_exterior(2, 1.5, 1e6, 20_000, rng)
+    brute, hit = naive.walk_on_spheres_exterior(2, 1.5, 1e6, 20_000, rng)
     ang_b = np.where(hit, np.arctan2(brute[:, 1], brute[:, 0]), rng.uniform(-np.pi, np.pi, len(hit)))
     ret = _returned(2, 1.5, 20_000, numba_rng)
     assert len(ret) == 20_000  # 2D: always returns
@@ -195,7 +170,7 @@ def test_return_to_sphere_3d_escape_and_law(numba_rng):
     these sample sizes.
     """
     rng = np.random.default_rng(2)
-    brute, hit = _wos_exterior(3, 1.5, 200.0, 20_000, rng)
+    brute, hit = naive.walk_on_spheres_exterior(3, 1.5, 200.0, 20_000, rng)
     ret = _returned(3, 1.5, 20_000, numba_rng)
     n = 20_000
     assert abs(len(ret) / n - 1 / 1.5) < 4 * np.sqrt((2 / 3) * (1 / 3) / n)
