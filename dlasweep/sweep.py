@@ -238,11 +238,11 @@ def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
     return [measure_task(task, counts, scales, root_seed, keep, history) for task, keep in zip(tasks, stored)]
 
 
-def measure_task(task, counts, scales, root_seed, stored=True, history=None) -> dict:
+def measure_task(task, counts, scales, root_seed, stored, history) -> dict:
     """Grow one cluster and measure every count; runs on a worker.
 
-    Its Rg along the growth is kept at ``history`` (default
-    ``growth_counts(counts)``); its positions and diffusion times only when
+    Its Rg along the growth is kept at ``history`` (``growth_counts(counts)``,
+    computed once per batch); its positions and diffusion times only when
     ``stored`` (else empty). Never raises: a failure is returned as an
     ``error`` result with its message.
     """
@@ -254,8 +254,8 @@ def measure_task(task, counts, scales, root_seed, stored=True, history=None) -> 
         points = cluster.points
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
-        measures = measure.cluster_measures(points, prefix, growth_counts(counts) if history is None else history,
-                                            lattice=cluster.params["model"] == "lattice", scales=scales)
+        lattice = cluster.params["model"] == "lattice"
+        measures = measure.cluster_measures(points, prefix, history, lattice=lattice, scales=scales)
         return {
             **measures,
             "n_grown": prefix.astype(np.int64),
@@ -277,7 +277,7 @@ def error_result(counts, n_scales, dim, message) -> dict:
     result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
     result["status"][:] = STATUSES.index("error")
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
-            "error": np.array(" ".join(message.split()))}
+            "error": np.array(store.one_line(message))}
 
 
 class Parts:

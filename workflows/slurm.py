@@ -344,11 +344,12 @@ def main(argv=None) -> int:
         args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
         _check(args)
         from dlasweep.spec import SpecError, load_spec
+        from dlasweep.store import one_line
 
         try:
             load_spec(args.spec)
         except SpecError as err:
-            raise UsageError(" ".join(str(err).split())) from None
+            raise UsageError(one_line(err)) from None
         if not args.dry_run:
             _check_partition(args)
         handler = signal.getsignal(signal.SIGINT)
