@@ -559,8 +559,8 @@ class _PrefixBoxes:
             raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
         self.points, self.ends, self.lattice, self.offsets = p, ends, lattice, offsets
         p = p[: ends.max()]
-        low = np.array([c.min() for c in p.T])
-        extent = float(max(c.max() - c.min() for c in p.T)) + 2 * _HALF
+        low = p.min(axis=0)
+        extent = float((p.max(axis=0) - low).max()) + 2 * _HALF
         if scales is None:
             scales = default_scales(extent)
         # A sweep measures every cluster at the same scales: checked and planned once.
@@ -576,7 +576,9 @@ class _PrefixBoxes:
 
     def finish(self, done):
         """Count with ``box_counts`` the prefixes that ``_prefix_counts`` left (``done`` False, or not given)."""
-        for c in np.r_[np.flatnonzero(~done), len(done):len(self.ends)]:
+        for c in range(len(self.ends)):
+            if c < len(done) and done[c]:
+                continue
             self.counts[c] = box_counts(self.points[: self.ends[c]], self.lattice, self.scales, self.offsets)[1]
 
 

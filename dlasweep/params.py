@@ -7,6 +7,7 @@ raises ``ValueError`` naming the offending parameter.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from collections.abc import Callable
@@ -207,6 +208,20 @@ def resolve(**params) -> dict:
     ValueError
         On an unknown parameter or an invalid value; the message names it.
     """
+    try:
+        # A sweep grows thousands of clusters from a few configurations: each is checked once.
+        key = tuple((name, type(value), value) for name, value in params.items())
+        return dict(_resolved(key))
+    except TypeError:  # an unhashable value: checked afresh (and refused)
+        return _resolve(params)
+
+
+@functools.lru_cache(maxsize=256)
+def _resolved(key) -> dict:
+    return _resolve({name: value for name, _, value in key})
+
+
+def _resolve(params) -> dict:
     unknown = sorted(set(params) - set(DEFAULTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: unknown model parameter (known: {', '.join(DEFAULTS)})")

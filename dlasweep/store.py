@@ -274,23 +274,32 @@ def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
         Each stored cluster's points ``(n, dim)`` and diffusion times, in
         ``cluster`` order.
     """
-    columns = ragged_columns(ds)
-    total = int(ds["cluster_particles"].sum())
-    ragged = {name: np.empty(total, dtype) for name, dtype in columns.items()}
-    for start, block in _blocks(columns, _split(columns, clusters), PARTICLE_CHUNK):
-        for name, values in block.items():
-            ragged[name][start:start + len(values)] = values
+    columns = ragged_columns(ds["model"], ds["dim"])
+    ragged = {name: np.zeros(int(ds["cluster_particles"].sum()), dtype) for name, dtype in columns.items()}
+    start = 0
+    for points, times in clusters:
+        for name, values in _cluster_columns(columns, points, times).items():
+            ragged[name][start:start + len(times)] = values
+        start += len(times)
     return _describe(ds.assign({name: ("particle", values) for name, values in ragged.items()}))
 
 
-def ragged_columns(ds) -> dict:
-    """The per-particle variables of a dataset's clusters and their types: positions, then diffusion times.
+def _cluster_columns(columns, points, times) -> dict:
+    """One cluster's values of each of ``columns``; 2D points get z = 0 among 3D columns."""
+    axes = [name for name in columns if name in AXES]
+    return {**{a: points[:, k] if k < points.shape[1] else np.zeros(len(points), points.dtype)
+               for k, a in enumerate(axes)}, "diffusion_time": times}
 
-    Lattice positions are int32 sites, off-lattice ones float64; with
-    ``dim`` swept, 2D clusters lie in the z = 0 plane of 3D columns.
+
+def ragged_columns(models, dims) -> dict:
+    """The per-particle variables of clusters of these models and dims, and their types: positions, then diffusion times.
+
+    Lattice positions are int32 sites, off-lattice ones float64 (and float64
+    for all when both are swept); with ``dim`` swept, 2D clusters lie in the
+    z = 0 plane of 3D columns.
     """
-    lattice = bool((ds["model"] == "lattice").all())
-    return {**{a: ragged_dtype(lattice) for a in AXES[:int(ds["dim"].max())]}, "diffusion_time": np.dtype(np.int64)}
+    lattice = bool((np.asarray(models) == "lattice").all())
+    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(np.int64)}
 
 
 PARTICLE_CHUNK = 1 << 16
@@ -319,7 +328,8 @@ def save(ds: xr.Dataset, path, clusters=None) -> None:
     The file is written under a temporary name in the target folder and
     renamed, so the final name never holds a partial file. The
     per-particle variables go in ``PARTICLE_CHUNK`` values at a time, each
-    a whole compressed chunk, so they are never all in memory.
+    a whole compressed chunk, so they are never all in memory
+    (``ParticleWriter``).
 
     Parameters
     ----------
@@ -331,86 +341,108 @@ def save(ds: xr.Dataset, path, clusters=None) -> None:
         Default: ``ds``'s own per-particle variables, if any.
     """
     path = Path(path)
-    tmp = path.with_name(f"{path.name}.tmp{os.getpid()}")
     particle = [name for name, var in ds.variables.items() if var.dims == ("particle",)]
-    if clusters is not None:
-        columns, blocks = ragged_columns(ds), _split(ragged_columns(ds), clusters)
-    elif particle:
-        columns = {name: ds[name].dtype for name in particle}
-        blocks = ({name: ds[name][i:i + PARTICLE_CHUNK].values for name in particle}
-                  for i in range(0, ds.sizes["particle"], PARTICLE_CHUNK))
-    else:
-        columns, blocks = {}, ()
-    rest = ds.drop_vars(particle)
-    encoding = {}
-    for name, var in rest.variables.items():
-        compressible = var.ndim > 0 and var.dtype.kind in "biuf"
-        enc = {"zlib": True, "complevel": 4, "shuffle": True} if compressible else {}
-        if name in ds.coords or var.dtype.kind in "biu":
-            # Coordinates and counts have no missing values; CF wants no fill there.
-            enc["_FillValue"] = None
-        if var.dtype.kind in "OU":
-            enc["dtype"] = "S1"  # a char array: see CF in the module docstring
-        encoding[name] = enc
+    columns = ragged_columns(ds["model"], ds["dim"]) if clusters is not None else {
+        name: ds[name].dtype for name in particle}
+    writer = ParticleWriter(path.with_name(f"{path.name}.tmp{os.getpid()}"), columns)
     try:
-        rest.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
-        if columns:
-            with netCDF4.Dataset(tmp, "a") as nc:
-                _write_ragged(nc, columns, blocks, int(ds["cluster_particles"].sum()))
-        os.replace(tmp, path)
+        if clusters is not None:
+            for points, times in clusters:
+                writer.add(points, times)
+        else:
+            for i in range(0, ds.sizes.get("particle", 0), PARTICLE_CHUNK):
+                writer.add_columns({name: ds[name][i:i + PARTICLE_CHUNK].values for name in particle})
+        writer.finish(ds, path)
     finally:
-        if tmp.exists():
-            tmp.unlink()
+        writer.discard()
 
 
-def _write_ragged(nc, columns, blocks, total):
-    """Define the per-particle variables in an open file and fill them, a whole chunk per write."""
-    nc.createDimension("particle", total)
-    chunk = min(PARTICLE_CHUNK, max(total, 1))
-    variables = {}
-    for name, dtype in columns.items():
-        # Never missing, so no fill value (as the counts).
-        var = nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB, shuffle=True,
-                                chunksizes=(chunk,), fill_value=False)
-        var.setncatts(attributes(name, dtype))
-        variables[name] = var
-    written = 0
-    for start, block in _blocks(columns, blocks, chunk):
-        for name, values in block.items():
-            variables[name][start:start + len(values)] = values
-        written = start + len(next(iter(block.values())))
-    if written != total:
-        raise ValueError(f"clusters hold {written} particles, cluster_particles says {total}")
+class ParticleWriter:
+    """A dataset's netCDF file in the making: first its per-particle variables,
+    filled cluster after cluster, then (``finish``) the rest, renamed into place.
 
+    Each write is a whole ``PARTICLE_CHUNK`` of values, compressed as it is
+    written; netCDF lets other threads run meanwhile, so a sweep stores the
+    clusters that finished while it grows the next ones.
 
-def _split(columns, clusters):
-    """Column blocks of clusters given as (points, diffusion times); 2D points get z = 0 among 3D columns."""
-    axes = [name for name in columns if name in AXES]
-    for points, times in clusters:
-        block = {a: points[:, k] if k < points.shape[1] else np.zeros(len(points)) for k, a in enumerate(axes)}
-        block["diffusion_time"] = times
-        yield block
-
-
-def _blocks(columns, blocks, chunk):
-    """Regroup blocks of columns of any length into ``(start, block)`` of ``chunk`` values (the last shorter).
-
-    One buffer of ``chunk`` values per column: memory does not grow with the data.
+    Parameters
+    ----------
+    tmp : path
+        Where the file lies until ``finish``; ``discard`` removes it.
+    columns : dict
+        The per-particle variables and their types (``ragged_columns``);
+        none: the file has no ``particle`` dimension.
     """
-    buffer = {name: np.empty(chunk, dtype) for name, dtype in columns.items()}
-    filled = start = 0
-    for block in blocks:
+
+    def __init__(self, tmp, columns: dict):
+        self.tmp = Path(tmp)
+        self.written = 0
+        self._variables, self._buffer, self._filled = {}, {}, 0
+        cache = netCDF4.get_chunk_cache()
+        # No chunk cache (netCDF's setting for the files it opens next): each whole
+        # chunk is compressed as it is written, not all of them at close.
+        netCDF4.set_chunk_cache(0)
+        try:
+            self._nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
+            if columns:
+                self._nc.createDimension("particle", None)  # its length is known at the end
+            for name, dtype in columns.items():
+                # Never missing, so no fill value (as the counts).
+                var = self._nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB,
+                                              shuffle=True, chunksizes=(PARTICLE_CHUNK,), fill_value=False)
+                var.setncatts(attributes(name, dtype))
+                self._variables[name] = var
+                self._buffer[name] = np.empty(PARTICLE_CHUNK, dtype)
+        finally:
+            netCDF4.set_chunk_cache(*cache)
+
+    def add(self, points, times):
+        """Append one cluster: its points ``(n, dim)`` (2D ones get z = 0 among 3D columns) and diffusion times."""
+        self.add_columns(_cluster_columns(self._variables, points, times))
+
+    def add_columns(self, block: dict):
+        """Append values of every per-particle variable (arrays of one length); whole chunks are written."""
         n, done = len(next(iter(block.values()))), 0
         while done < n:
-            take = min(chunk - filled, n - done)
+            take = min(PARTICLE_CHUNK - self._filled, n - done)
             for name, values in block.items():
-                buffer[name][filled:filled + take] = values[done:done + take]
-            filled, done = filled + take, done + take
-            if filled == chunk:
-                yield start, buffer
-                start, filled = start + chunk, 0
-    if filled:
-        yield start, {name: values[:filled] for name, values in buffer.items()}
+                self._buffer[name][self._filled:self._filled + take] = values[done:done + take]
+            self._filled, done = self._filled + take, done + take
+            if self._filled == PARTICLE_CHUNK:
+                self._flush()
+
+    def _flush(self):
+        for name, var in self._variables.items():
+            var[self.written:self.written + self._filled] = self._buffer[name][: self._filled]
+        self.written, self._filled = self.written + self._filled, 0
+
+    def finish(self, ds: xr.Dataset, path):
+        """Write the rest of ``ds`` (all but its per-particle variables) and rename the file to ``path``."""
+        self._flush()
+        total = int(ds["cluster_particles"].sum()) if self._variables else 0
+        if self.written != total:
+            raise ValueError(f"clusters hold {self.written} particles, cluster_particles says {total}")
+        self._nc.close()
+        rest = ds.drop_vars([name for name, var in ds.variables.items() if var.dims == ("particle",)])
+        encoding = {}
+        for name, var in rest.variables.items():
+            compressible = var.ndim > 0 and var.dtype.kind in "biuf"
+            enc = {"zlib": True, "complevel": 4, "shuffle": True} if compressible else {}
+            if name in ds.coords or var.dtype.kind in "biu":
+                # Coordinates and counts have no missing values; CF wants no fill there.
+                enc["_FillValue"] = None
+            if var.dtype.kind in "OU":
+                enc["dtype"] = "S1"  # a char array: see CF in the module docstring
+            encoding[name] = enc
+        # unlimited_dims: not the ``particle`` of a dataset opened from a file, which the file has
+        rest.to_netcdf(self.tmp, mode="a", engine="netcdf4", format="NETCDF4", encoding=encoding, unlimited_dims=[])
+        os.replace(self.tmp, path)
+
+    def discard(self):
+        """Close and remove the unfinished file (nothing, once finished)."""
+        if self._nc.isopen():
+            self._nc.close()
+        self.tmp.unlink(missing_ok=True)
 
 
 def open_sweep(path) -> xr.Dataset:

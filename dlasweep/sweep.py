@@ -13,10 +13,13 @@ temporary name, then renamed; see ``Parts``). ``resume=True`` keeps the
 clusters finished there and computes the rest; ``OUT.parts/manifest.json``
 records the spec's identity so that a changed spec is refused. A run holds
 an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
-same output is refused, and a killed run's lock is free at once. At the end
-the dataset is assembled from the parts in one pass without the clusters'
-positions, which then go from the parts straight into the file
-(``store.save``), so memory holds one part at a time. Positions are kept
+same output is refused, and a killed run's lock is free at once. The stored
+clusters' positions go into the file's per-particle variables while the
+sweep runs, each as soon as every cluster before it has finished
+(``OUT.parts/particles.nc``, ``store.ParticleWriter``), so memory holds a
+few parts at a time and the compression overlaps the growth. At the end the
+dataset is assembled from the parts in one pass without the positions,
+written into that file, and the file renamed to OUT. Positions are kept
 only for the clusters ``[run] store_clusters`` stores (``Spec.stores``);
 every cluster's curves, its Rg along the growth included, are kept.
 This is the only module that knows dask.
@@ -61,7 +64,7 @@ from .grow import compiled, grow
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
-MANIFEST, LOCK = "manifest.json", ".lock"
+MANIFEST, LOCK, PARTICLES = "manifest.json", ".lock", "particles.nc"
 
 TASK_SECONDS = 0.25
 """Work given to one dask task: its overhead (scheduling, a part file: milliseconds)
@@ -70,6 +73,12 @@ becomes small, while a kill loses little and the threads share the end of a swee
 SECONDS_PER_PARTICLE = 3e-6
 """Growing and measuring a 2D lattice cluster, per particle of its largest count
 (about linear from 10^3 to 10^5 particles; other models take longer)."""
+
+SWITCH_INTERVAL = 0.0005
+"""Seconds a thread may hold the GIL while another waits, in the embedded cluster
+(Python's default: 0.005). Measured on 10,000 lattice clusters of 10^3 on 2
+threads, whole sweep: 0.005 s 15.1-15.4 s; 0.001 s 14.4-14.5; 0.0005 s 14.1-15.1;
+0.0002 s 14.2-14.3."""
 
 TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reached", "tasks failed"
 """Why a target sweep stopped (its ``stop_reason``); failed tasks stop it so that
@@ -125,9 +134,12 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     # Tasks the sweep may run at most: the embedded cluster needs no more threads.
     most = math.prod(spec.shape[:-1]) * (spec.max_seeds or len(spec.seeds))
     with _parts_folder(spec, out, resume) as parts, contextlib.ExitStack() as session:
-        batch, dask_client = spec, None
+        batch, dask_client, stream = spec, None, None
         while True:
             todo = [t for t in batch.tasks() if not parts.finished(t.key)]
+            if out is not None:  # the batch's clusters go into the file as they finish
+                stream = _Stream(batch, parts, todo)
+                session.callback(stream.writer.discard)
             if todo:
                 if dask_client is None:
                     if progress and client is None and scheduler_file is None and _compiles(spec):
@@ -137,20 +149,23 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                 bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
                            desc=spec.name, disable=not progress, file=sys.stderr)
                 with bar:
-                    _compute(dask_client, batch, todo, parts, bar)
+                    _compute(dask_client, batch, todo, parts, bar, stream)
             ds, failed = _assemble(batch, parts)
             if spec.target_ci is not None:
                 half_width = _ci_half_width(ds)
                 more, reason = _more_seeds(spec, len(batch.seeds), half_width.values, failed)
                 if more:
                     batch = spec.with_seeds(more)
+                    if stream is not None:  # the cluster order changes: the next batch writes them again
+                        stream.writer.discard()
                     continue
                 ds = store.record_stop(ds, half_width, spec.target_ci, spec.max_seeds, reason)
             # The clusters go from the parts into the file (or memory) one part at a time.
             if out is None:
                 ds = store.with_clusters(ds, _clusters(batch, parts))
             else:
-                store.save(ds, out, _clusters(batch, parts))
+                stream.feed()
+                stream.writer.finish(ds, out)
                 ds = store.open_sweep(out)
             break
         parts.done = not failed
@@ -293,9 +308,10 @@ class Parts:
     holds it too. Knowing what is done reads only the indexes, once. The
     sweep sets ``done`` once its file is complete: the folder is removed.
 
-    The parts this run writes are also kept in memory, up to ``KEEP_BYTES``,
-    all but the clusters' positions and diffusion times: assembling the
-    dataset then reads back only what an earlier run wrote.
+    The parts this run writes are also kept in memory, up to ``KEEP_BYTES``
+    for the clusters' positions and diffusion times and as much again for
+    the rest: assembling the dataset and writing its file then read back
+    only what an earlier run wrote, or what did not fit.
     """
 
     KEEP_BYTES = 1 << 28
@@ -305,7 +321,7 @@ class Parts:
         self.path = path
         self.done = False
         self._where = None
-        self._kept, self._kept_bytes = {}, 0
+        self._kept, self._kept_bytes = {}, {"clusters": 0, "science": 0}
 
     @property
     def where(self) -> dict:
@@ -352,10 +368,16 @@ class Parts:
             raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
-        kept = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
-        size = sum(values.nbytes for values in kept.values())
-        if self._kept_bytes + size <= self.KEEP_BYTES:
-            self._kept[file], self._kept_bytes = {"keys": keys, **kept}, self._kept_bytes + size
+        clusters = {name: members[name] for base in self.PER_PARTICLE for name in (base, f"{base}.shape")}
+        science = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
+        kept = {"keys": keys}
+        for group, values in (("clusters", clusters), ("science", science)):
+            size = sum(v.nbytes for v in values.values())
+            if self._kept_bytes[group] + size <= self.KEEP_BYTES:
+                kept.update(values)
+                self._kept_bytes[group] += size
+        if len(kept) > 1:
+            self._kept[file] = kept
 
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
@@ -513,11 +535,18 @@ def _connected(client, scheduler_file, workers, n_tasks):
     # per spawned process, and loads the compiled kernels once, not per process.
     # Its worker shares this process: no memory limit to watch (memory_limit=0),
     # and no statistical profiler sampling the threads every 10 ms under the GIL.
-    with (dask.config.set({"distributed.worker.profile.enabled": False}),
-          LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
-                       dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
-          Client(cluster) as embedded):
-        yield embedded
+    interval = sys.getswitchinterval()
+    # A thread back from a kernel waits for the GIL until its holder (the
+    # event loop, another thread's Python) lets go or the interval ends.
+    sys.setswitchinterval(SWITCH_INTERVAL)
+    try:
+        with (dask.config.set({"distributed.worker.profile.enabled": False}),
+              LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
+                           dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
+              Client(cluster) as embedded):
+            yield embedded
+    finally:
+        sys.setswitchinterval(interval)
 
 
 def _usable_cores() -> int:
@@ -527,8 +556,9 @@ def _usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _compute(client, spec, todo, parts, bar):
-    """Submit batches of tasks in a bounded window and save each batch as one part as it arrives."""
+def _compute(client, spec, todo, parts, bar, stream=None):
+    """Submit batches of tasks in a bounded window, save each batch as one part as it arrives, and
+    ``stream`` the clusters it completes."""
     from distributed import as_completed
 
     counts = np.asarray(spec.counts, np.int64)
@@ -561,6 +591,8 @@ def _compute(client, spec, todo, parts, bar):
             message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
             results = [error_result(counts, len(scales), task.params["dim"], message) for task in batch]
         parts.write({task.key: result for task, result in zip(batch, results)})
+        if stream is not None:
+            stream.feed(task.key for task in batch)
         future.release()
         bar.update(len(batch))
         for batch in itertools.islice(pending, 1):
@@ -592,6 +624,31 @@ def _assemble(spec, parts):
     top = int(np.argmax(fits)) if fits.any() else len(scales) - 1
     science["box_count"] = science["box_count"][..., : top + 1]
     return store.to_dataset(spec, scales[: top + 1], history, science, sizes, failed), failed
+
+
+class _Stream:
+    """A spec's stored clusters written into its file (``store.ParticleWriter``, in the parts
+    folder until the end) in cluster order, each once it and all before it have finished."""
+
+    def __init__(self, spec, parts, todo):
+        tasks = list(spec.tasks())
+        self.parts, self.next, self.pending = parts, 0, {task.key for task in todo}
+        self.keys = [task.key for task in tasks if spec.stores(task)]
+        columns = store.ragged_columns([t.params["model"] for t in tasks], [t.params["dim"] for t in tasks])
+        self.writer = store.ParticleWriter(parts.path / PARTICLES, columns)
+
+    def feed(self, done=()):
+        """Write the clusters that come next in order and are no longer pending (``todo`` but not ``done``).
+
+        A cluster that failed in this run is written too (it has no points); one
+        that failed in an earlier run is pending until it is computed again.
+        """
+        self.pending.difference_update(done)
+        ready = list(itertools.takewhile(lambda key: key not in self.pending,
+                                         itertools.islice(self.keys, self.next, None)))
+        for result in self.parts.results(ready, Parts.PER_PARTICLE):
+            self.writer.add(result["points"], result["diffusion_time"])
+        self.next += len(ready)
 
 
 def _clusters(spec, parts):

@@ -240,23 +240,16 @@ def test_streamed_clusters_fill_whole_compressed_chunks(tmp_path, monkeypatch):
     np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _ in clusters]))
 
 
-def test_blocks_are_whole_chunks_given_as_soon_as_full():
-    columns = {"x": np.dtype(np.int32), "diffusion_time": np.dtype(np.int64)}
-    taken = []
-
-    def clusters():
-        for n in (3, 9, 0, 4):
-            taken.append(n)
-            yield {"x": np.arange(n, dtype=np.int32) + 100 * len(taken), "diffusion_time": np.full(n, len(taken))}
-
-    starts, x = [], []
-    for start, block in store._blocks(columns, clusters(), 5):
-        starts.append(start)
-        x.append(block["x"].copy())
-        if start == 0:
-            assert taken == [3, 9]  # the first chunk leaves before the rest is read
-    assert starts == [0, 5, 10, 15] and [len(v) for v in x] == [5, 5, 5, 1]
-    np.testing.assert_array_equal(np.concatenate(x), np.r_[np.arange(3) + 100, np.arange(9) + 200, np.arange(4) + 400])
+def test_particle_writer_writes_whole_chunks_as_soon_as_full(tmp_path, monkeypatch):
+    monkeypatch.setattr(store, "PARTICLE_CHUNK", 5)
+    writer = store.ParticleWriter(tmp_path / "part.nc", {"x": np.dtype(np.int32), "diffusion_time": np.dtype(np.int64)})
+    written = []
+    for n in (3, 9, 0, 4):
+        writer.add(np.arange(2 * n, dtype=np.int32).reshape(n, 2), np.full(n, n))
+        written.append(writer.written)
+    assert written == [0, 10, 10, 15]  # the last value waits for finish
+    writer.discard()
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_cluster_count_that_disagrees_writes_nothing(tmp_path):

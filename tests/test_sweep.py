@@ -181,6 +181,37 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_c
     healed.close()
 
 
+def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, monkeypatch, reference):
+    # Chunks of 16 values, tasks of one cluster: each finished cluster fills chunks at once.
+    monkeypatch.setattr(store, "PARTICLE_CHUNK", 16)
+    batches_of(monkeypatch, 1)
+    written, feed = [], sweep._Stream.feed
+
+    def fed(self, done=()):
+        feed(self, done)
+        written.append(self.writer.written)
+
+    monkeypatch.setattr(sweep._Stream, "feed", fed)
+    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
+    assert len(written) == 13 and written == sorted(written) and written[5] > 0
+    xr.testing.assert_identical(science(ds), science(reference))
+    ds.close()
+    assert files_under(tmp_path) == {Path("t.nc")}
+
+
+def test_the_embedded_cluster_shortens_the_switch_interval_and_restores_it(monkeypatch):
+    before, during = sys.getswitchinterval(), []
+    growth_counts = sweep.growth_counts
+
+    def counted(counts):  # called by each task, in the worker's thread (a module global: not pickled)
+        during.append(sys.getswitchinterval())
+        return growth_counts(counts)
+
+    monkeypatch.setattr(sweep, "growth_counts", counted)
+    dla.run_sweep(parse_spec("[grid]\nn_particles = [5]\nseeds = 2\n"), workers=1)
+    assert sweep.SWITCH_INTERVAL in during and sys.getswitchinterval() == before != sweep.SWITCH_INTERVAL
+
+
 def test_submission_is_batched(dask_client, monkeypatch):
     """The client holds a bounded window of tasks, however many the sweep has."""
     spec = parse_spec("[grid]\nn_particles = [1]\nseeds = 250\n")
@@ -331,9 +362,9 @@ def test_the_lock_is_held_for_every_batch_and_the_final_file(tmp_path, dask_clie
         return checked
 
     monkeypatch.setattr(sweep.Parts, "write", check(sweep.Parts.write))
-    monkeypatch.setattr(store, "save", check(store.save))
+    monkeypatch.setattr(store.ParticleWriter, "finish", check(store.ParticleWriter.finish))
     dla.run_sweep(spec, client=dask_client, out=out).close()
-    assert held == ["write"] * 24 + ["save"]
+    assert held == ["write"] * 24 + ["finish"]
     assert files_under(tmp_path) == {Path("t.nc")}
 
 
@@ -463,13 +494,14 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
     monkeypatch.setattr(sweep.Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
     for batch in (tasks[:3], tasks[3:4], tasks[4:]):
         parts.write({t.key: r for t, r in zip(batch, sweep.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
-        if kept == 1:
-            monkeypatch.setattr(sweep.Parts, "KEEP_BYTES", parts._kept_bytes)
-    assert len(parts._kept) == kept
-    names = ("box_count", "radius_gyration_history", "status", "points.shape", "error")
+        if kept == 1:  # both budgets spent
+            parts._kept_bytes = dict.fromkeys(parts._kept_bytes, sweep.Parts.KEEP_BYTES)
+    assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())
     keys = [t.key for t in tasks][::-1]
-    from_disk = list(sweep.Parts(tmp_path).results(keys, names))
-    for a, b in zip(parts.results(keys, names), from_disk, strict=True):
-        assert a.keys() == b.keys()
-        for name in a:
-            np.testing.assert_array_equal(a[name], b[name])
+    for names in (("box_count", "radius_gyration_history", "status", "points.shape", "error"),
+                  ("points", "diffusion_time")):
+        from_disk = list(sweep.Parts(tmp_path).results(keys, names))
+        for a, b in zip(parts.results(keys, names), from_disk, strict=True):
+            assert a.keys() == b.keys()
+            for name in a:
+                np.testing.assert_array_equal(a[name], b[name])
