@@ -559,8 +559,8 @@ class _PrefixBoxes:
             raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
         self.points, self.ends, self.lattice, self.offsets = p, ends, lattice, offsets
         p = p[: ends.max()]
-        low = p.min(axis=0)
-        extent = float((p.max(axis=0) - low).max()) + 2 * _HALF
+        low, side = _corner(p)
+        extent = float(side) + 2 * _HALF
         if scales is None:
             scales = default_scales(extent)
         # A sweep measures every cluster at the same scales: checked and planned once.
@@ -580,6 +580,21 @@ class _PrefixBoxes:
             if c < len(done) and done[c]:
                 continue
             self.counts[c] = box_counts(self.points[: self.ends[c]], self.lattice, self.scales, self.offsets)[1]
+
+
+@jit
+def _corner(points):
+    """The low corner of a non-empty set and its longest side (max - min over the axes).
+
+    Compiled: numpy's reductions along an axis of an (n, 2) array cost a
+    sweep of small clusters more than the rest of their measurement's Python.
+    """
+    low, high = points[0].copy(), points[0].copy()
+    for i in range(1, len(points)):
+        for a in range(points.shape[1]):
+            low[a] = min(low[a], points[i, a])
+            high[a] = max(high[a], points[i, a])
+    return low, (high - low).max()
 
 
 @functools.lru_cache(maxsize=32)

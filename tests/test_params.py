@@ -43,3 +43,13 @@ def test_dir_lists_the_public_api():
     assert set(dla.__all__) <= set(dir(dla))
     for name in ("run_sweep", "open_sweep", "cluster_points", "summarise", "report"):
         assert name in dir(dla) and callable(getattr(dla, name)), name
+
+
+def test_resolve_caches_a_configuration_yet_returns_a_fresh_dict_and_keeps_types_apart():
+    first = resolve(model="lattice", jumps=True)
+    first["dim"] = 99
+    assert resolve(model="lattice", jumps=True)["dim"] == 2
+    with pytest.raises(ValueError, match="jumps: expected true or false, got 1"):
+        resolve(model="lattice", jumps=1)  # equal to True, and hashed alike
+    with pytest.raises(ValueError, match=r"dim: expected an integer, got \[2\]"):
+        resolve(dim=[2])  # unhashable: checked without the cache
