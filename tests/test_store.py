@@ -236,6 +236,7 @@ def test_streamed_clusters_fill_whole_compressed_chunks(tmp_path, monkeypatch):
     with netCDF4.Dataset(path) as nc:
         for name in ("x", "y", "diffusion_time"):
             assert nc[name].chunking() == [5] and nc[name].filters()["complevel"] == store.PARTICLE_ZLIB
+            assert nc[name].filters()["shuffle"] == store.shuffled(nc[name].dtype)  # float64: both models swept
             assert "_FillValue" not in nc[name].ncattrs()
     np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _ in clusters]))
 
@@ -257,3 +258,11 @@ def test_a_cluster_count_that_disagrees_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match="cluster_particles says"):
         store.save(ds, tmp_path / "short.nc", [c for c in clusters if c is not max(clusters, key=lambda c: len(c[1]))])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_lattice_sites_alone_are_written_unshuffled(tmp_path):
+    ds, clusters = synthetic_parts(SPEC.replace('model = ["lattice", "offlattice"]', 'model = "lattice"'))
+    store.save(ds, tmp_path / "lattice.nc", iter(clusters))
+    with netCDF4.Dataset(tmp_path / "lattice.nc") as nc:
+        assert {name: (nc[name].dtype, nc[name].filters()["shuffle"]) for name in ("x", "y", "diffusion_time")} == {
+            "x": (np.int32, False), "y": (np.int32, False), "diffusion_time": (np.int64, True)}
