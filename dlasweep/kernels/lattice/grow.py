@@ -171,10 +171,12 @@ def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1
 
 @jit
 def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
-    """Add the particle at site q; the grid grows (is rebuilt) when the cluster nears its edge.
+    """Add the particle at site q, marked in the grid unless the cluster nears its edge.
 
     ``grid`` is (words, start, blocks, cells, field, width, off). Returns the
-    new count, r_max, h_max and grid.
+    new count, r_max, h_max, the grid's width and offset, and whether it was
+    outgrown: the caller then drops it and builds a larger one (``words.rebuild``), which marks
+    every particle, this one included.
     """
     words, start, blocks, cells, field, width, off = grid
     line = period > 0
@@ -193,10 +195,16 @@ def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
         width = (int(width * GROWTH) + 15) // 16 * 16
         if not line:
             off = width // 2
-        words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
-    else:
-        mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim])
-    return count, r_max, h_max, (words, start, blocks, cells, field, width, off)
+        return count, r_max, h_max, width, off, True
+    mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim])
+    return count, r_max, h_max, width, off, False
+
+
+@jit
+def _no_grid():
+    """Empty arrays of a grid's types: a caller takes them to drop its old grid."""
+    none = np.zeros(0, np.int64)
+    return np.zeros(0, np.uint64), none, none, none, np.zeros(0, np.uint8)
 
 
 @jit
@@ -280,7 +288,16 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     need_launch = True
     stuck = False
     level = 1
+    regrid = False
     while count < n:
+        if regrid:
+            # Built here, not where the old grid was outgrown: numba frees an array
+            # held across a loop's passes only when the pass ends, and the two
+            # grids would be held at once (measured: 30% of the peak at 1e6 in 3D).
+            words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+            grid = (words, start, blocks, cells, field, width, off)
+            nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+            regrid = False
         if max_steps > 0 and total >= max_steps:
             status = codes.STEP_LIMIT
             break
@@ -468,9 +485,11 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                     pos[a] = pos[a] % period
         rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
         if stuck:
-            count, r_max, h_max, grid = _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid)
-            words, start, blocks, cells, field, width, off = grid
-            nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+            count, r_max, h_max, width, off, regrid = _attach(points, steps, count, pending, q, dim, period,
+                                                              r_max, h_max, grid)
+            if regrid:  # dropped now, the larger grid built at the top of the next pass
+                words, start, blocks, cells, field = _no_grid()
+                grid = (words, start, blocks, cells, field, width, off)
             pending = 0
             passed = checkpoint(marks, times, passed, count, t0)
             need_launch = True
@@ -499,7 +518,7 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     # the box: sites lo..hi on every axis; a substrate's box is 0..size-1 high
     box_lo = 0 if line else lo
     box_hi = size - 1 if line else size - 1 + lo
-    words, start, blocks, _cells, _field, width, off = grid
+    words, start, blocks, cells, field, width, off = grid
     q = np.zeros(3, np.int64)
     alive = np.zeros(walkers, np.bool_)
     wpos = np.zeros((walkers, 3), np.int64)
@@ -515,7 +534,12 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     total = np.int64(0)
     pending = np.int64(0)  # steps since the previous attachment
     status = codes.OK
+    regrid = False
     while count < n:
+        if regrid:  # as in ``_grow``
+            words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+            grid = (words, start, blocks, cells, field, width, off)
+            regrid = False
         if max_steps > 0 and total >= max_steps:
             status = codes.STEP_LIMIT
             break
@@ -542,8 +566,11 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
         for a in range(3):
             wpos[w, a] = q[a]
         if stuck:
-            count, r_max, h_max, grid = _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid)
-            words, start, blocks, _cells, _field, width, off = grid
+            count, r_max, h_max, width, off, regrid = _attach(points, steps, count, pending, q, dim, period,
+                                                              r_max, h_max, grid)
+            if regrid:  # as in ``_grow``
+                words, start, blocks, cells, field = _no_grid()
+                grid = (words, start, blocks, cells, field, width, off)
             pending = 0
             passed = checkpoint(marks, times, passed, count, t0)
             alive[w] = False
