@@ -17,7 +17,8 @@ same output is refused, and a killed run's lock is free at once. The stored
 clusters' positions go into the file's per-particle variables while the
 sweep runs, each as soon as every cluster before it has finished
 (``OUT.parts/particles.nc``, ``store.ParticleWriter``), so memory holds a
-few parts at a time and the compression overlaps the growth. At the end the
+few parts at a time (``Parts`` lets their positions go once written) and
+the compression overlaps the growth. At the end the
 dataset is assembled from the parts in one pass without the positions,
 written into that file, and the file renamed to OUT. Positions are kept
 only for the clusters ``[run] store_clusters`` stores (``Spec.stores``);
@@ -368,7 +369,7 @@ class Parts:
             raise
         os.replace(tmp, file)
         self._add(index, file, keys, failed)
-        clusters = {name: members[name] for base in self.PER_PARTICLE for name in (base, f"{base}.shape")}
+        clusters = {name: members[name] for name in self.PER_PARTICLE}
         science = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
         kept = {"keys": keys}
         for group, values in (("clusters", clusters), ("science", science)):
@@ -376,21 +377,29 @@ class Parts:
             if self._kept_bytes[group] + size <= self.KEEP_BYTES:
                 kept.update(values)
                 self._kept_bytes[group] += size
+        if self.PER_PARTICLE[0] in kept:  # their shapes come along (tiny: not counted)
+            kept.update({f"{name}.shape": members[f"{name}.shape"] for name in self.PER_PARTICLE})
         if len(kept) > 1:
             self._kept[file] = kept
 
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
 
-    def results(self, keys, names):
+    def results(self, keys, names, release=False):
         """Variables ``names`` of the result of each key, in order; a part is read once for each run of its keys.
 
         Only those members are read: the clusters' positions, say, or
         everything but them. ``<name>.shape`` gives a variable's shape
-        without reading it.
+        without reading it. ``release``: the positions kept in memory of
+        each part read are let go (a later read takes them from its file).
         """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
-            kept = self._kept.get(file, {})
+            if release and self.PER_PARTICLE[0] in self._kept.get(file, {}):
+                clusters = {name: self._kept[file].pop(name) for name in self.PER_PARTICLE}
+                self._kept_bytes["clusters"] -= sum(values.nbytes for values in clusters.values())
+                kept = {**self._kept[file], **clusters}  # for this read
+            else:
+                kept = self._kept.get(file, {})
             with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
                                        else np.load(file)) as z:
                 part = [{} for _ in z["keys"]]
@@ -646,7 +655,7 @@ class _Stream:
         self.pending.difference_update(done)
         ready = list(itertools.takewhile(lambda key: key not in self.pending,
                                          itertools.islice(self.keys, self.next, None)))
-        for result in self.parts.results(ready, Parts.PER_PARTICLE):
+        for result in self.parts.results(ready, Parts.PER_PARTICLE, release=True):
             self.writer.add(result["points"], result["diffusion_time"])
         self.next += len(ready)
 

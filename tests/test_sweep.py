@@ -498,10 +498,12 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
             parts._kept_bytes = dict.fromkeys(parts._kept_bytes, sweep.Parts.KEEP_BYTES)
     assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())
     keys = [t.key for t in tasks][::-1]
-    for names in (("box_count", "radius_gyration_history", "status", "points.shape", "error"),
-                  ("points", "diffusion_time")):
+    for names, release in ((("box_count", "radius_gyration_history", "status", "points.shape", "error"), False),
+                           (("points", "diffusion_time"), True), (("points", "diffusion_time"), False)):
         from_disk = list(sweep.Parts(tmp_path).results(keys, names))
-        for a, b in zip(parts.results(keys, names), from_disk, strict=True):
+        for a, b in zip(parts.results(keys, names, release=release), from_disk, strict=True):
             assert a.keys() == b.keys()
             for name in a:
                 np.testing.assert_array_equal(a[name], b[name])
+    # Released positions are read from the files from then on (the third pass).
+    assert not any("points" in k for k in parts._kept.values()) and (kept != 3 or parts._kept_bytes["clusters"] == 0)
