@@ -61,8 +61,11 @@ Memory: besides the points (16 or 24 bytes each), the diffusion times (8)
 and the cell-list links (4), the grids take about a bit per unit cell
 (maps), a byte per cell of side ``2**FS`` (field) and 4 bytes per tile of
 64 cell-list cells (directory) over a square ``GROW`` times the cluster's
-extent, and 256 bytes per tile that holds particles. When the cluster outgrows them they are
-dropped before the larger ones are built, so the two are never held at once.
+extent, and 256 bytes per tile that holds particles. When the cluster
+outgrows them they are dropped, and the larger ones built in the walk
+loop's next pass: numba frees an array held across a loop's passes only
+when the pass ends, so building them in the same pass held both. (With
+walkers > 1 both are still held during a rebuild: the box bounds them.)
 
 Speed note: helpers that take arrays and branch must not be called from the
 hot loop (numba then wraps each call in atomic NRT incref/decref, which cost

@@ -397,7 +397,7 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
 @jit
 def no_grid():
     """An empty grid: the caller drops its old grid's arrays by taking this
-    before it builds the new one, so the two are never held at once."""
+    before it builds the new one (in a later pass of its loop; see the package docstring)."""
     z = np.zeros(1, np.int64)
     return (np.zeros(18, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
             np.zeros(0, np.int32), np.zeros(0, np.uint8))

@@ -410,7 +410,13 @@ def _grow(n, model, marks, rng, times):
     total = np.int64(0)
     pending = np.int64(0)
     status = codes.OK
+    regrid = -1
     while count < n:
+        if regrid >= 0:
+            # Built here, not where the old grid was outgrown: numba frees an array
+            # held across a loop's passes only when the pass ends (as in the lattice kernel).
+            grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid)
+            regrid = -1
         launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
         if model.launch_box:
             if (line and geo[2] >= size - 2.0) or (not line and geo[1] >= hb - 2.0):
@@ -427,11 +433,10 @@ def _grow(n, model, marks, rng, times):
             status = codes.STEP_LIMIT
             break
         count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
-        if tiles >= 0:
-            # drop the old grid (every name of it) before building the larger one: never two at once
+        if tiles >= 0:  # dropped now (every name of it), the larger one built at the top of the next pass
             grid = no_grid()
             gi, gf, words, start, blocks, cells, dirr, heads, field = grid
-            grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
+            regrid = tiles
         pending = 0
         passed = checkpoint(marks, times, passed, count, t0)
     return pts, steps, count, status
