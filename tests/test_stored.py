@@ -77,7 +77,7 @@ def test_unstored_clusters_leave_no_positions_in_the_parts(dask_client, tmp_path
     def killed(*args):
         raise Interrupt
 
-    monkeypatch.setattr(store, "save", killed)  # every cluster finished, the file not written
+    monkeypatch.setattr(store.ParticleWriter, "finish", killed)  # every cluster finished, the file not written
     with pytest.raises(Interrupt):
         dla.run_sweep(spec_storing(1), client=dask_client, out=out)
     parts = sweep.Parts(Path(f"{out}.parts"))
