@@ -14,7 +14,9 @@ import time
 import warnings
 
 import numba
-from numba.core.errors import NumbaWarning
+import numba.extending
+import numpy as np
+from numba.core.errors import NumbaPendingDeprecationWarning
 
 _SETTINGS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 jit = numba.njit(**_SETTINGS)
@@ -23,14 +25,30 @@ inline = numba.njit(**_SETTINGS, inline="always")
 """Decorator for small scalar helpers inlined at numba level. Measured: on the
 lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
 
-# The clock below needs object mode for an instant per checkpoint; numba warns
-# that such a block takes the GIL, which is what we want there.
-warnings.filterwarnings("ignore", message=".*object mode.*", category=NumbaWarning)
+# The growth kernels take a batch's generators as a Python list: numba's
+# typed list took 14 us a generator to build, more than the call it saves.
+warnings.filterwarnings("ignore", message="(?s).*reflected list", category=NumbaPendingDeprecationWarning)
+
+_clock_gettime = numba.types.ExternalFunction("clock_gettime", numba.int32(numba.int32, numba.types.voidptr))
+"""The C library's, linked by name (a ctypes pointer would keep numba from caching its callers)."""
 
 
-@numba.njit(cache=True)
+@numba.extending.intrinsic
+def _address(typingctx, array):
+    """The address of an array's data, for C."""
+    def codegen(context, builder, signature, args):
+        data = context.make_array(array)(context, builder, args[0]).data
+        return builder.bitcast(data, context.get_value_type(numba.types.voidptr))
+    return numba.types.voidptr(array), codegen
+
+
+@jit
 def clock():
-    """Seconds from a monotonic clock, callable from kernels."""
-    with numba.objmode(t="float64"):
-        t = time.perf_counter()
-    return t
+    """Seconds from the monotonic clock (``time.CLOCK_MONOTONIC``), callable from kernels without the GIL.
+
+    With the GIL (numba's object mode, as it was), a kernel of a sweep's
+    thread waited at each checkpoint while another thread ran Python.
+    """
+    timespec = np.empty(2, np.int64)  # seconds, nanoseconds: a struct timespec on 64-bit systems
+    _clock_gettime(time.CLOCK_MONOTONIC, _address(timespec))
+    return timespec[0] + timespec[1] * 1e-9
