@@ -38,6 +38,8 @@ class Cluster:
     checkpoints, times : ndarray
         Particle counts and the seconds spent growing to each (NaN when the
         count was not reached).
+    seconds : float
+        The whole growth (NaN when not known).
     """
 
     points: np.ndarray
@@ -46,6 +48,7 @@ class Cluster:
     params: dict
     checkpoints: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    seconds: float = np.nan
 
     @property
     def n(self) -> int:
@@ -66,7 +69,7 @@ def compiled(model: str) -> bool:
 
     Only this process's cache is looked at: the embedded cluster's too.
     """
-    kernel = {"lattice": lattice.grow._grow, "offlattice": offlattice.grow._walk}[model]
+    kernel = {"lattice": lattice.grow._grow_each, "offlattice": offlattice.grow._grow_each}[model]
     return os.path.exists(kernel._cache._cache_file._index_path)
 
 
@@ -93,35 +96,61 @@ def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluste
     -------
     Cluster
     """
+    p, marks = _checked(n, checkpoints, params)
+    rng = rng_for(seed)
+    if progress is None:
+        [result] = KERNELS[p["model"]](int(n), p, marks, [rng])
+    else:
+        result = _watched(KERNELS[p["model"]], int(n), p, marks, rng, progress)
+    return _cluster(result, p, marks)
+
+
+def grow_many(n: int, seeds, *, checkpoints=None, **params) -> list:
+    """``grow`` with each of ``seeds``, in one compiled call: the same clusters, in order.
+
+    A sweep's batches of small clusters grow this way; one call for each
+    cluster cost more than growing one of 10^3 particles. Parameters are those of
+    ``grow`` (``seeds``: a sequence of its ``seed``), without ``progress``.
+
+    Returns
+    -------
+    list of Cluster
+    """
+    p, marks = _checked(n, checkpoints, params)
+    results = KERNELS[p["model"]](int(n), p, marks, [rng_for(seed) for seed in seeds])
+    return [_cluster(result, p, marks) for result in results]
+
+
+def _checked(n, checkpoints, params):
+    """The resolved parameters and the sorted checkpoints of a growth to ``n``, checked."""
     if not _params.is_integer(n) or n < 1:
         raise ValueError(f"n: expected an integer >= 1, got {n!r}")
     p = _params.resolve(**params)
-    rng = rng_for(seed)
     marks = np.unique(np.asarray([n] if checkpoints is None else checkpoints, dtype=np.int64))
     if len(marks) and (marks[0] < 1 or marks[-1] > n):
         raise ValueError(f"checkpoints: every count must lie in [1, {n}]")
-    kernel = KERNELS[p["model"]]
-    if progress is None:
-        points, steps, code, times = kernel(int(n), p, marks, rng)
-    else:
-        points, steps, code, times = _watched(kernel, int(n), p, marks, rng, progress)
-    return Cluster(points, steps, _params.STATUSES[code], p, marks, times)
+    return p, marks
+
+
+def _cluster(result, p, marks):
+    points, steps, code, times, seconds = result
+    return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds)
 
 
 def _watched(kernel, n, p, marks, rng, progress):
-    """``kernel(n, p, marks, rng)`` run in a thread, the counts it passes reported to ``progress``.
+    """``kernel(n, p, marks, [rng])`` run in a thread, the counts it passes reported to ``progress``.
 
     Growth does not depend on the marks (they only read a clock), so more
     marks are passed, every n / ``WATCH_MARKS``, and the times it fills are
     read as it goes.
     """
     watch = np.union1d(marks, np.linspace(0, n, WATCH_MARKS + 1)[1:].astype(np.int64)).astype(np.int64)
-    times = np.full(len(watch), np.nan)
+    times = np.full((1, len(watch)), np.nan)
     result = []
 
     def run():
         try:
-            result.append(kernel(n, p, watch, rng, times))
+            result.extend(kernel(n, p, watch, [rng], times))
         except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
             result.append(err)
 
@@ -130,10 +159,10 @@ def _watched(kernel, n, p, marks, rng, progress):
     worker.start()
     while worker.is_alive():
         worker.join(WATCH_SECONDS)
-        passed = np.flatnonzero(~np.isnan(times))
+        passed = np.flatnonzero(~np.isnan(times[0]))
         progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
     if isinstance(result[0], BaseException):
         raise result[0]
-    points, steps, code, _ = result[0]
+    points, steps, code, _, seconds = result[0]
     progress(len(points), time.perf_counter() - start)
-    return points, steps, code, times[np.isin(watch, marks)]
+    return points, steps, code, times[0, np.isin(watch, marks)], seconds

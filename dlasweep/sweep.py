@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import functools
 import importlib
 import itertools
 import json
@@ -51,7 +52,7 @@ import shutil
 import socket
 import sys
 import tempfile
-import time
+import threading
 import uuid
 import warnings
 from pathlib import Path
@@ -61,7 +62,7 @@ from tqdm import tqdm
 
 from . import measure, store
 from .analysis import growth_counts, headline
-from .grow import compiled, grow
+from .grow import compiled, grow, grow_many
 from .params import STATUSES
 from .spec import Spec, differences, load_spec
 
@@ -145,8 +146,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                 if dask_client is None:
                     if progress and client is None and scheduler_file is None and _compiles(spec):
                         print(f"{spec.name}: compiling kernels (once)", file=sys.stderr)
-                    dask_client = session.enter_context(
-                        _connected(client, scheduler_file, workers or spec.workers, most))
+                    dask_client = session.enter_context(_connected(client, scheduler_file, workers or spec.workers, most,
+                                                                   functools.partial(_load_kernels, spec)))
                 bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
                            desc=spec.name, disable=not progress, file=sys.stderr)
                 with bar:
@@ -249,24 +250,35 @@ def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
     """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task.
 
     ``stored``: per task, whether its positions are kept (``Spec.stores``).
+    Each run of tasks with the same parameters grows in one compiled call
+    (``grow_many``); if that raises, each of its tasks grows alone, so that
+    only the clusters that fail are marked failed.
     """
     history = growth_counts(counts)
-    return [measure_task(task, counts, scales, root_seed, keep, history) for task, keep in zip(tasks, stored)]
+    results = []
+    for _, run in itertools.groupby(zip(tasks, stored), key=lambda pair: pair[0].params):
+        run = list(run)
+        try:
+            clusters = grow_many(counts[-1], [_stream(root_seed, task) for task, _ in run], checkpoints=counts,
+                                 **run[0][0].params)
+        except Exception:  # noqa: BLE001 (each task then grows alone and records its own error)
+            clusters = [None] * len(run)
+        results += [measure_task(task, counts, scales, root_seed, keep, history, cluster)
+                    for (task, keep), cluster in zip(run, clusters)]
+    return results
 
 
-def measure_task(task, counts, scales, root_seed, stored, history) -> dict:
-    """Grow one cluster and measure every count; runs on a worker.
+def measure_task(task, counts, scales, root_seed, stored, history, cluster=None) -> dict:
+    """Grow one cluster (unless ``cluster`` is the one grown) and measure every count; runs on a worker.
 
     Its Rg along the growth is kept at ``history`` (``growth_counts(counts)``,
     computed once per batch); its positions and diffusion times only when
     ``stored`` (else empty). Never raises: a failure is returned as an
     ``error`` result with its message.
     """
-    start = time.perf_counter()
     try:
-        cluster = grow(counts[-1], np.random.SeedSequence(root_seed, spawn_key=task.spawn_key),
-                       checkpoints=counts, **task.params)
-        elapsed = time.perf_counter() - start
+        if cluster is None:
+            cluster = grow(counts[-1], _stream(root_seed, task), checkpoints=counts, **task.params)
         points = cluster.points
         reached = np.asarray(counts) <= len(points)
         prefix = np.minimum(counts, len(points))
@@ -276,7 +288,7 @@ def measure_task(task, counts, scales, root_seed, stored, history) -> dict:
             **measures,
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
-            "wall_time": np.where(np.isnan(cluster.times), elapsed, cluster.times),
+            "wall_time": np.where(np.isnan(cluster.times), cluster.seconds, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],
             "diffusion_time": np.asarray(cluster.steps if stored else cluster.steps[:0], np.int64),
@@ -284,6 +296,11 @@ def measure_task(task, counts, scales, root_seed, stored, history) -> dict:
         }
     except Exception as err:
         return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
+
+
+def _stream(root_seed, task) -> np.random.SeedSequence:
+    """The task's random stream: from the root seed and its grid indices."""
+    return np.random.SeedSequence(root_seed, spawn_key=task.spawn_key)
 
 
 def error_result(counts, n_scales, dim, message) -> dict:
@@ -523,9 +540,26 @@ def _check_manifest(path, identity, resume):
                           + "; ".join(changes) + ")")
 
 
+def _load_kernels(spec):
+    """Grow and measure a cluster of a few particles of each model swept.
+
+    The kernels its tasks call load (or compile) here, once, while the
+    embedded cluster starts, not in each of its threads at once, one
+    waiting for the other under numba's lock.
+    """
+    first = {}
+    for task in spec.tasks():
+        first.setdefault(task.params["model"], task)
+    counts = np.array([min(spec.counts[0], 10)])
+    measure_tasks(list(first.values()), counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
+
+
 @contextlib.contextmanager
-def _connected(client, scheduler_file, workers, n_tasks):
-    """A client: the one given, one for an address or scheduler file, or an embedded cluster."""
+def _connected(client, scheduler_file, workers, n_tasks, load):
+    """A client: the one given, one for an address or scheduler file, or an embedded cluster.
+
+    ``load`` is called in a thread while the embedded cluster starts (the kernels, ``_load_kernels``).
+    """
     # distributed loads here, not with the module: ``dlasweep grow`` and ``info`` never need it
     import dask
     from distributed import Client, LocalCluster
@@ -548,11 +582,14 @@ def _connected(client, scheduler_file, workers, n_tasks):
     # A thread back from a kernel waits for the GIL until its holder (the
     # event loop, another thread's Python) lets go or the interval ends.
     sys.setswitchinterval(SWITCH_INTERVAL)
+    loading = threading.Thread(target=load, name="dlasweep-load", daemon=True)
+    loading.start()
     try:
         with (dask.config.set({"distributed.worker.profile.enabled": False}),
               LocalCluster(n_workers=1, threads_per_worker=threads, processes=False, memory_limit=0,
                            dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
               Client(cluster) as embedded):
+            loading.join()
             yield embedded
     finally:
         sys.setswitchinterval(interval)

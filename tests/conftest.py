@@ -87,11 +87,17 @@ def replicate_1_fails(monkeypatch):
     """Make growing replicate 1 of every configuration raise, as a bug in a kernel would."""
     from dlasweep import sweep
 
-    real_grow = sweep.grow
+    real_grow, real_grow_many = sweep.grow, sweep.grow_many
 
     def grow(n, seed, **kwargs):
         if seed.spawn_key[-1] == 1:
             raise RuntimeError("simulated failure")
         return real_grow(n, seed, **kwargs)
 
+    def grow_many(n, seeds, **kwargs):
+        if any(seed.spawn_key[-1] == 1 for seed in seeds):
+            raise RuntimeError("simulated failure")
+        return real_grow_many(n, seeds, **kwargs)
+
     monkeypatch.setattr(sweep, "grow", grow)
+    monkeypatch.setattr(sweep, "grow_many", grow_many)

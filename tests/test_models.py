@@ -2,6 +2,7 @@
 
 import importlib
 import itertools
+import time
 
 import numpy as np
 import pytest
@@ -256,3 +257,32 @@ def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
     monkeypatch.setitem(growing.KERNELS, "lattice", broken)
     with pytest.raises(MemoryError, match="simulated"):
         dla.grow(100, 0, progress=lambda k, s: None)
+
+
+@pytest.mark.parametrize("kw", [{"model": "lattice"}, {"model": "offlattice"}, {"model": "lattice", "dim": 3},
+                                {"model": "offlattice", "size": 30}, {"model": "lattice", "walkers": 4, "size": 60}])
+def test_grow_many_grows_the_clusters_grow_grows_one_by_one(kw):
+    growing = importlib.import_module("dlasweep.grow")
+    seeds = [np.random.SeedSequence(5, spawn_key=(k,)) for k in range(4)]
+    marks = [10, 200, 2000]
+    many = growing.grow_many(2000, seeds, checkpoints=marks, **kw)
+    for got, seed in zip(many, seeds, strict=True):
+        want = dla.grow(2000, seed, checkpoints=marks, **kw)
+        np.testing.assert_array_equal(got.points, want.points)
+        np.testing.assert_array_equal(got.steps, want.steps)
+        assert got.points.dtype == want.points.dtype and got.status == want.status and got.params == want.params
+        np.testing.assert_array_equal(np.isnan(got.times), np.isnan(want.times))
+        # the whole growth's seconds: at least those to the last count reached
+        assert got.seconds > 0 and (np.isnan(got.times) | (got.times <= got.seconds)).all()
+    assert many[0].params is not many[1].params
+    if kw.get("size") == 30:  # a small box: stopped short, its last counts never reached
+        assert all(c.status == "boundary" and np.isnan(c.times[-1]) for c in many)
+
+
+def test_the_kernels_clock_reads_the_monotonic_clock():
+    from dlasweep._jit import clock
+
+    before = time.clock_gettime(time.CLOCK_MONOTONIC)
+    now = clock()
+    after = time.clock_gettime(time.CLOCK_MONOTONIC)
+    assert before <= now <= after

@@ -8,6 +8,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -212,6 +213,20 @@ def test_the_embedded_cluster_shortens_the_switch_interval_and_restores_it(monke
     assert sweep.SWITCH_INTERVAL in during and sys.getswitchinterval() == before != sweep.SWITCH_INTERVAL
 
 
+def test_the_embedded_cluster_has_its_kernels_loaded_before_the_first_task(monkeypatch):
+    threads = []
+    growth_counts = sweep.growth_counts
+
+    def recorded(counts):  # called once by each batch of tasks (a module global: not pickled)
+        threads.append(threading.current_thread().name)
+        return growth_counts(counts)
+
+    monkeypatch.setattr(sweep, "growth_counts", recorded)
+    ds = dla.run_sweep(parse_spec("[grid]\nn_particles = [5, 50]\nseeds = 3\n"), workers=1)
+    assert threads[0] == "dlasweep-load" and "dlasweep-load" not in threads[1:] and len(threads) > 1
+    assert (ds["n_grown"].values == [[5] * 3, [50] * 3]).all()
+
+
 def test_submission_is_batched(dask_client, monkeypatch):
     """The client holds a bounded window of tasks, however many the sweep has."""
     spec = parse_spec("[grid]\nn_particles = [1]\nseeds = 250\n")
@@ -243,6 +258,9 @@ def test_early_stops_keep_their_status(dask_client):
         final = ds.isel({**dict(zip(["stickiness", "size", "seed"], task.index)), "n_particles": -1})
         assert store.STATUS_FLAGS[int(final["status"])] == cluster.status
         assert int(final["n_grown"]) == int(ds["cluster_particles"][k]) == cluster.n
+        # a count never reached is given the whole growth's seconds, which are at least those to any count
+        seconds = ds["wall_time"].isel(dict(zip(["stickiness", "size", "seed"], task.index))).values
+        assert (seconds > 0).all() and (np.diff(seconds) >= 0).all()
     assert (ds["status"] == store.STATUS_FLAGS.index("step_limit")).any()
 
 

@@ -582,8 +582,19 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     return count, status
 
 
-def grow_lattice(n, p, marks, rng, times=None):
-    """Grow a lattice cluster; see ``dlasweep.grow`` for the meaning.
+@jit
+def _grow_each(n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds, t_start, t_cut, t_alias,
+               t_off):
+    """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays."""
+    for i in range(len(rngs)):
+        start = clock()
+        counts[i], statuses[i] = _grow(n, model, moves, marks, rngs[i], points[i], steps[i], times[i], t_start, t_cut,
+                                       t_alias, t_off)
+        seconds[i] = clock() - start
+
+
+def grow_lattice(n, p, marks, rngs, times=None):
+    """Grow lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow`` for the meaning.
 
     Parameters
     ----------
@@ -592,23 +603,27 @@ def grow_lattice(n, p, marks, rng, times=None):
         Model parameters as ``dlasweep.params.resolve`` returns them.
     marks : int64 (K,)
         Particle counts at which to record the time.
-    rng : numpy.random.Generator
-    times : float64 (K,), optional
+    rngs : list of numpy.random.Generator
+    times : float64 (len(rngs), K), optional
         Filled as the marks pass (NaN before), so that another thread can
         watch the growth.
 
     Returns
     -------
-    points : int32 (n_grown, dim)
-    steps : int64 (n_grown,)
-    status : int code into ``dlasweep.params.STATUSES``
-    times : float64 seconds at each of ``marks`` (NaN when not reached)
+    list, for each generator, of
+        points : int32 (n_grown, dim)
+        steps : int64 (n_grown,)
+        status : int code into ``dlasweep.params.STATUSES``
+        times : float64 seconds at each of ``marks`` (NaN when not reached)
+        seconds : float, the whole growth
     """
     model = model_from(p)
     moore = model.neighbours != 2 * model.dim
-    points = np.zeros((n, model.dim), np.int32)
-    steps = np.zeros(n, np.int64)
-    times = np.full(len(marks), np.nan) if times is None else times
-    count, status = _grow(n, model, unit_moves(model.dim, moore), np.asarray(marks, np.int64), rng, points, steps,
-                          times, *exit_tables(model.dim, moore))
-    return grown(points, steps, count, status, times)
+    points = np.zeros((len(rngs), n, model.dim), np.int32)
+    steps = np.zeros((len(rngs), n), np.int64)
+    times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
+    counts, statuses = np.zeros((2, len(rngs)), np.int64)
+    seconds = np.zeros(len(rngs))
+    _grow_each(n, model, unit_moves(model.dim, moore), np.asarray(marks, np.int64), list(rngs), points, steps, times,
+               counts, statuses, seconds, *exit_tables(model.dim, moore))
+    return [grown(*result) for result in zip(points, steps, counts, statuses, times, seconds)]

@@ -545,11 +545,23 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
     return count, status
 
 
-def grow_offlattice(n, p, marks, rng, times=None):
-    """Grow an off-lattice cluster; see ``dlasweep.grow`` for the meaning.
+@jit
+def _grow_each(n, model, marks, rngs, times):
+    """``_grow`` with each generator of the list ``rngs`` in turn (row i of ``times``); its results and seconds."""
+    out = []
+    for i in range(len(rngs)):
+        start = clock()
+        pts, steps, count, status = _grow(n, model, marks, rngs[i], times[i])
+        out.append((pts, steps, count, status, times[i], clock() - start))
+    return out
+
+
+def grow_offlattice(n, p, marks, rngs, times=None):
+    """Grow off-lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow``.
 
     Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
     the float64 centres of unit-diameter disks (spheres), (n_grown, dim).
     """
-    times = np.full(len(marks), np.nan) if times is None else times
-    return grown(*_grow(int(n), model_from(p), np.asarray(marks, np.int64), rng, times), times)
+    times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
+    return [grown(*result) for result in _grow_each(int(n), model_from(p), np.asarray(marks, np.int64), list(rngs),
+                                                     times)]
