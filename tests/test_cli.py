@@ -260,6 +260,7 @@ def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_clu
         raise MemoryError("no room")
 
     monkeypatch.setattr(sweep, "grow", broken)
+    monkeypatch.setattr(sweep, "grow_many", broken)
     out = tmp_path / "tiny.nc"
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", dask_cluster.scheduler_address)
     assert status == 1
