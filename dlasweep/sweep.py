@@ -246,6 +246,16 @@ def _batch_size(spec, n_todo, threads) -> int:
     return max(1, min(int(TASK_SECONDS / per_cluster), n_todo // (4 * threads)))
 
 
+def _batches(todo, size, threads):
+    """``todo`` in consecutive slices of ``size`` tasks, near the end of at most what is left
+    / (2 x threads) (guided scheduling), so that the threads finish together."""
+    start = 0
+    while start < len(todo):
+        n = max(1, min(size, (len(todo) - start) // (2 * threads)))
+        yield todo[start:start + n]
+        start += n
+
+
 def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
     """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task.
 
@@ -545,13 +555,17 @@ def _load_kernels(spec):
 
     The kernels its tasks call load (or compile) here, once, while the
     embedded cluster starts, not in each of its threads at once, one
-    waiting for the other under numba's lock.
+    waiting for the other under numba's lock. So does dask.array, which
+    xarray imports when it builds the dataset: imported while the tasks
+    ran, it held the GIL they need between kernels.
     """
     first = {}
     for task in spec.tasks():
         first.setdefault(task.params["model"], task)
     counts = np.array([min(spec.counts[0], 10)])
     measure_tasks(list(first.values()), counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
+    with contextlib.suppress(ImportError):
+        importlib.import_module("dask.array")
 
 
 @contextlib.contextmanager
@@ -611,8 +625,7 @@ def _compute(client, spec, todo, parts, bar, stream=None):
     scales = sweep_scales(spec)
     threads = max(1, sum(client.nthreads().values()))  # an adaptive cluster may start with none
     window = max(100, 4 * threads)
-    size = _batch_size(spec, len(todo), threads)
-    pending = (todo[i:i + size] for i in range(0, len(todo), size))
+    pending = _batches(todo, _batch_size(spec, len(todo), threads), threads)
     # Unique per run: a key shared with an earlier run's lingering future would return its result.
     tag = uuid.uuid4().hex[:12]
     batch_of = {}
@@ -625,10 +638,6 @@ def _compute(client, spec, todo, parts, bar, stream=None):
 
     running = as_completed([submit(t) for t in itertools.islice(pending, window)],
                            with_results=True, raise_errors=False)
-    # xarray imports dask.array (half a second) when it builds the dataset;
-    # the idle client thread does it now, while the workers grow clusters
-    with contextlib.suppress(ImportError):
-        importlib.import_module("dask.array")
     for future, results in running:
         batch = batch_of.pop(future.key)
         if future.status != "finished":

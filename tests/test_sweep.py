@@ -102,8 +102,8 @@ def finished_clusters(out):
 
 
 def batches_of(monkeypatch, size):
-    """Make every dask task a batch of ``size`` clusters."""
-    monkeypatch.setattr(sweep, "_batch_size", lambda spec, n_todo, threads: size)
+    """Make every dask task a batch of ``size`` clusters (the last one: what is left)."""
+    monkeypatch.setattr(sweep, "_batches", lambda todo, _, threads: (todo[i:i + size] for i in range(0, len(todo), size)))
 
 
 def test_the_batch_size_follows_the_counts():
@@ -114,6 +114,18 @@ def test_the_batch_size_follows_the_counts():
     # About TASK_SECONDS of work per dask task, and at least four of them per thread.
     assert (size([100, 1000], 1000), size([1000, 10000], 64), size([10000, 100000], 32)) == (83, 8, 1)
     assert size([100, 1000], 40) == 5 and size([10], 7) == 1
+
+
+def test_batches_shrink_near_the_end_so_that_the_threads_finish_together():
+    todo = list(range(1000))
+    batches = list(sweep._batches(todo, 83, 2))
+    sizes = [len(b) for b in batches]
+    assert sum(batches, []) == todo and sizes[:8] == [83] * 8 and sizes[-1] == 1
+    assert all(a >= b for a, b in zip(sizes, sizes[1:]))
+    # each batch at most what is left over 2 x threads, once that is below the size
+    left = np.cumsum(sizes[::-1])[::-1]
+    assert all(n <= max(1, min(83, rest // 4)) for n, rest in zip(sizes, left))
+    assert [len(b) for b in sweep._batches(list(range(5)), 8, 1)] == [2, 1, 1, 1]
 
 
 def test_batches_give_the_same_results(reference, dask_client, monkeypatch):
