@@ -109,14 +109,18 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     for n in naive_counts:
         plan.append(("lattice-2d", "exact", MODELS["lattice-2d"], n))
         plan.append(("lattice-2d", "naive", {**MODELS["lattice-2d"], **NAIVE}, n))
-    echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'peak MB':>9}{'added MB':>10}")
+    # ns/step: the cost of one walk step (or exact jump), which rises as the
+    # grids near the walker outgrow the processor's caches.
+    echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
+         f"{'peak MB':>9}{'added MB':>10}")
     for name, method, params, n in plan:
         r = probe(params, n)
         r.update(model=name, method=method, n=n)
         rows.append(r)
         echo(
             f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
-            f"{r['steps'] / r['n_grown']:>16.1f}{r['peak_mb']:>9.0f}{r['added_mb']:>10.0f}"
+            f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
+            f"{r['added_mb']:>10.0f}"
         )
     ds = _to_dataset(rows)
     for name in MODELS:
