@@ -147,7 +147,9 @@ def _verdict(value, target):
         return ""
     if not np.isfinite(value):
         return f" (target {target:g})"
-    return f" (<= {target:g}: met)" if value <= target else f" (<= {target:g}: {value / target - 1:.0%} over)"
+    over = value / target - 1
+    # under 1%, one decimal: "0% over" would read as met
+    return f" (<= {target:g}: met)" if over <= 0 else f" (<= {target:g}: {over:.{0 if over >= 0.01 else 1}%} over)"
 
 
 def _power(n: int) -> str:

@@ -37,7 +37,7 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
 
 
 def test_target_table_compares_each_figure_with_its_target():
-    from dlasweep.bench import _to_dataset, target_table
+    from dlasweep.bench import _to_dataset, _verdict, target_table
 
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n, "steps": n,
                  "status": "ok", "peak_mb": 200.0 + n / 1e5, "added_mb": n / 1e5}
@@ -50,6 +50,7 @@ def test_target_table_compares_each_figure_with_its_target():
     assert lattice[2] == "502.4 (<= 90: 458% over)"
     assert lattice[4] == "300 (100) (<= 350: met)"
     assert lattice[6].rstrip(" |") == "1.20 (<= 1.1: 9% over)"
+    assert _verdict(130.6, 130) == " (<= 130: 0.5% over)" and _verdict(130, 130) == " (<= 130: met)"
     assert table["offlattice-3d"][1] == "20.0 (<= 25: met)"
     assert table["offlattice-3d"][6].rstrip(" |") == ""  # no exponent for 3D, nor without 1e7
 
