@@ -227,7 +227,15 @@ def _more_seeds(spec, n, half_width, failed):
 
 def _compiles(spec) -> bool:
     """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept."""
-    return not all(compiled(m) for m in {task.params["model"] for task in spec.tasks()})
+    return not all(map(compiled, _first_task_of_each_model(spec)))
+
+
+def _first_task_of_each_model(spec) -> dict:
+    """Model name -> the first task of the spec that grows it."""
+    first = {}
+    for task in spec.tasks():
+        first.setdefault(task.params["model"], task)
+    return first
 
 
 def sweep_scales(spec: Spec) -> np.ndarray:
@@ -559,11 +567,9 @@ def _load_kernels(spec):
     xarray imports when it builds the dataset: imported while the tasks
     ran, it held the GIL they need between kernels.
     """
-    first = {}
-    for task in spec.tasks():
-        first.setdefault(task.params["model"], task)
+    first = list(_first_task_of_each_model(spec).values())
     counts = np.array([min(spec.counts[0], 10)])
-    measure_tasks(list(first.values()), counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
+    measure_tasks(first, counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
     with contextlib.suppress(ImportError):
         importlib.import_module("dask.array")
 
