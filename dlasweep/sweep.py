@@ -450,6 +450,34 @@ class Parts:
                         result[name] = flat[start:end].reshape(shape)
             yield from (part[self.where[key][1]] for key in run)
 
+    def table(self, keys, names) -> dict:
+        """Variables ``names`` of the results of ``keys``, each stacked on a first axis in key order.
+
+        For variables of one shape in every result (the science, and the
+        ``<name>.shape`` rows): a part's values are taken whole, not a result
+        at a time, so assembling 10^4 small clusters costs milliseconds.
+        """
+        keys = list(keys)
+        table = {}
+        for file, run in itertools.groupby(enumerate(keys), lambda item: self.where[item[1]][0]):
+            rows, at = zip(*((i, self.where[key][1]) for i, key in run))
+            kept = self._kept.get(file, {})
+            with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
+                                       else np.load(file)) as z:
+                for name in names:
+                    values = z[name]
+                    if not name.endswith(".shape"):
+                        shapes = z[f"{name}.shape"]
+                        if (shapes != shapes[0]).any():
+                            raise ValueError(f"{file}: {name} differs in shape between results")
+                        values = values.reshape(len(shapes), *shapes[0])
+                    if name not in table:
+                        table[name] = np.empty((len(keys), *values.shape[1:]), values.dtype)
+                    elif np.result_type(table[name], values) != table[name].dtype:  # a longer error message
+                        table[name] = table[name].astype(np.result_type(table[name], values))
+                    table[name][list(rows)] = values[list(at)]
+        return table
+
 
 @contextlib.contextmanager
 def _parts_folder(spec, out, resume):
@@ -668,17 +696,15 @@ def _assemble(spec, parts):
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
     science = {name: store.blank(name, shapes.get(name, grid)) for name in (*store.SCIENCE, "wall_time")}
-    sizes, failed = [], []
-    for task, result in zip(tasks, parts.results((t.key for t in tasks), (*science, "points.shape", "error"))):
-        for name, values in science.items():
-            # Every count of the task's seed, or (the history) the task's own row.
-            where = task.index if name == "radius_gyration_history" else (*task.index[:-1], slice(None),
-                                                                            task.index[-1])
-            values[where] = result[name]
-        if spec.stores(task):
-            sizes.append(int(result["points.shape"][0]))
-        if str(result["error"]):
-            failed.append((task.key, str(result["error"])))
+    table = parts.table((t.key for t in tasks), (*science, "points.shape", "error"))
+    for name, values in science.items():
+        # The tasks are the grid's points in C order; but for the history, a
+        # task's values run along n_particles, which comes before seed.
+        each = table[name].reshape(*spec.shape, *table[name].shape[1:])
+        values[...] = each if name == "radius_gyration_history" else np.moveaxis(each, len(spec.shape) - 1,
+                                                                                   len(spec.shape))
+    sizes = [int(shape[0]) for task, shape in zip(tasks, table["points.shape"]) if spec.stores(task)]
+    failed = [(task.key, str(error)) for task, error in zip(tasks, table["error"]) if str(error)]
 
     # Keep scales up to the first at which every cluster fits in one box.
     fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)

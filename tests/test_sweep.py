@@ -537,3 +537,25 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
                 np.testing.assert_array_equal(a[name], b[name])
     # Released positions are read from the files from then on (the third pass).
     assert not any("points" in k for k in parts._kept.values()) and (kept != 3 or parts._kept_bytes["clusters"] == 0)
+
+
+def test_parts_table_stacks_what_results_gives(tmp_path):
+    # The whole-part route of _assemble equals the result-by-result one: keys in any order, across parts,
+    # a failed result (its message longer than the first part's) replaced by a finished one in a later part.
+    spec = parse_spec(TINY_SPEC)
+    tasks = list(spec.tasks())
+    counts, scales = np.asarray(spec.counts), sweep.sweep_scales(spec)
+    parts = sweep.Parts(tmp_path)
+    measured = dict(zip((t.key for t in tasks), sweep.measure_tasks(tasks, counts, scales, 1, [True] * len(tasks))))
+    failed = sweep.error_result(counts, len(scales), 2, "ValueError: " + "a long message " * 10)
+    parts.write({t.key: measured[t.key] for t in tasks[:2]})
+    parts.write({tasks[2].key: failed, tasks[3].key: failed, **{t.key: measured[t.key] for t in tasks[4:]}})
+    parts.write({tasks[3].key: measured[tasks[3].key]})
+    names = ("box_count", "radius_gyration_history", "status", "wall_time", "points.shape", "error")
+    # Kept in memory and from the files; the first part read has only empty messages, or the long one.
+    for reader, keys in ((parts, [t.key for t in tasks]), (sweep.Parts(tmp_path), [t.key for t in tasks][::-1])):
+        table = reader.table(keys, names)
+        for i, result in enumerate(reader.results(keys, names)):
+            for name in names:
+                np.testing.assert_array_equal(table[name][i], result[name])
+        assert [str(e) for e in table["error"]].count(str(failed["error"])) == 1
