@@ -471,3 +471,12 @@ def test_cluster_measures_equal_the_functions_they_gather(dim, lattice):
         np.testing.assert_array_equal(got["anisotropy"], measure.anisotropy(points, ends))
     with pytest.raises(ValueError, match="history"):
         measure.cluster_measures(np.zeros((3, 2)), [3], [0])
+
+
+@pytest.mark.parametrize("high, ordered", [((91, 92), False), ((2047, 1100), True), ((63, 63, 63), False),
+                                           ((200, 200, 200), True), ((5e6, 3.0), False)])
+def test_particles_are_put_in_first_axis_order_only_where_their_bitmaps_outgrow_the_cache(high, ordered):
+    # 92 x 2 words of 8 bytes, or 2048 x 18; a 3D set of 64 x 64 rows of 1 word, or 201 x 201 of 4 words;
+    # a first axis longer than the sort's table allows (and than the set's size) is never sorted.
+    points = np.zeros((1000, len(high)))
+    assert measure._ordered(points, np.array(high, float)) is ordered
