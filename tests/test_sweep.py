@@ -1,6 +1,7 @@
 """Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
 
 import contextlib
+import gc
 import errno
 import json
 import os
@@ -559,3 +560,25 @@ def test_parts_table_stacks_what_results_gives(tmp_path):
             for name in names:
                 np.testing.assert_array_equal(table[name][i], result[name])
         assert [str(e) for e in table["error"]].count(str(failed["error"])) == 1
+
+
+@pytest.mark.parametrize("fails", [False, True])
+def test_the_collector_skips_the_setup_while_tasks_run_and_has_it_back_after(tmp_path, monkeypatch, dask_client, fails):
+    # gc.freeze() while the tasks run (the objects of the imports and the cluster's start are not scanned
+    # in each full collection); gc.unfreeze() when the sweep ends, also when it fails (a full disk).
+    frozen, grow_many = [], sweep.grow_many
+
+    def watched(*args, **kwargs):
+        frozen.append(gc.get_freeze_count())
+        return grow_many(*args, **kwargs)
+
+    def full(self, results):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(sweep, "grow_many", watched)
+    if fails:
+        monkeypatch.setattr(sweep.Parts, "write", full)
+    with pytest.raises(OSError) if fails else contextlib.nullcontext():
+        dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
+    # A failed sweep's tasks may still run on a shared cluster after it returns: its first batch ran frozen.
+    assert frozen and min(frozen[:1] if fails else frozen) > 0 and gc.get_freeze_count() == 0
