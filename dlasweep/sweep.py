@@ -150,7 +150,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                     dask_client = session.enter_context(_connected(client, scheduler_file, workers or spec.workers, most,
                                                                    functools.partial(_load_kernels, spec)))
                     # What the imports, kernels and cluster made outlives the sweep: the collector
-                    # need not scan it in every full collection (75 ms each, all threads waiting).
+                    # need not scan it in every full collection (75 ms each, holding the GIL).
                     gc.freeze()
                     session.callback(gc.unfreeze)
                 bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
