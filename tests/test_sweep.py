@@ -563,13 +563,14 @@ def test_parts_table_stacks_what_results_gives(tmp_path):
 
 
 @pytest.mark.parametrize("fails", [False, True])
-def test_the_collector_skips_the_setup_while_tasks_run_and_has_it_back_after(tmp_path, monkeypatch, dask_client, fails):
-    # gc.freeze() while the tasks run (the objects of the imports and the cluster's start are not scanned
-    # in each full collection); gc.unfreeze() when the sweep ends, also when it fails (a full disk).
-    frozen, grow_many = [], sweep.grow_many
+def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, monkeypatch, dask_client, fails):
+    # gc.freeze() and a higher young threshold while the tasks run (the objects of the imports and the
+    # cluster's start are not scanned in each full collection); as before when the sweep ends, also when it
+    # fails (a full disk).
+    frozen, grow_many, thresholds = [], sweep.grow_many, gc.get_threshold()
 
     def watched(*args, **kwargs):
-        frozen.append(gc.get_freeze_count())
+        frozen.append((gc.get_freeze_count(), gc.get_threshold()[0]))
         return grow_many(*args, **kwargs)
 
     def full(self, results):
@@ -581,4 +582,6 @@ def test_the_collector_skips_the_setup_while_tasks_run_and_has_it_back_after(tmp
     with pytest.raises(OSError) if fails else contextlib.nullcontext():
         dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
     # A failed sweep's tasks may still run on a shared cluster after it returns: its first batch ran frozen.
-    assert frozen and min(frozen[:1] if fails else frozen) > 0 and gc.get_freeze_count() == 0
+    during = frozen[:1] if fails else frozen
+    assert during and all(count > 0 and young == sweep.COLLECT_EVERY for count, young in during)
+    assert gc.get_freeze_count() == 0 and gc.get_threshold() == thresholds
