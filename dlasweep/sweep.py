@@ -422,6 +422,13 @@ class Parts:
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
 
+    @contextlib.contextmanager
+    def _members(self, file, kept, names):
+        """A part's members: those ``kept`` in memory when they hold every one of ``names``, else its file."""
+        with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
+                                   else np.load(file)) as z:
+            yield z
+
     def results(self, keys, names, release=False):
         """Variables ``names`` of the result of each key, in order; a part is read once for each run of its keys.
 
@@ -437,8 +444,7 @@ class Parts:
                 kept = {**self._kept[file], **clusters}  # for this read
             else:
                 kept = self._kept.get(file, {})
-            with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
-                                       else np.load(file)) as z:
+            with self._members(file, kept, names) as z:
                 part = [{} for _ in z["keys"]]
                 for name in names:
                     if name.endswith(".shape"):
@@ -463,9 +469,7 @@ class Parts:
         table = {}
         for file, run in itertools.groupby(enumerate(keys), lambda item: self.where[item[1]][0]):
             rows, at = zip(*((i, self.where[key][1]) for i, key in run))
-            kept = self._kept.get(file, {})
-            with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
-                                       else np.load(file)) as z:
+            with self._members(file, self._kept.get(file, {}), names) as z:
                 for name in names:
                     values = z[name]
                     if not name.endswith(".shape"):
@@ -619,11 +623,12 @@ def _collector_eased():
     What the imports, kernels and cluster made (about 200,000 objects)
     outlives the sweep, so it is frozen out of the full collections, which
     scanned it at about 70 ms each; young collections run every
-    ``COLLECT_EVERY`` allocations, so full ones come 30 times less often.
+    ``COLLECT_EVERY`` allocations (a threshold of 0, no automatic
+    collection, is kept).
     """
     thresholds = gc.get_threshold()
     gc.freeze()
-    gc.set_threshold(max(COLLECT_EVERY, thresholds[0]), *thresholds[1:])
+    gc.set_threshold(max(COLLECT_EVERY, thresholds[0]) if thresholds[0] else 0, *thresholds[1:])
     try:
         yield
     finally:

@@ -585,3 +585,15 @@ def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, mo
     during = frozen[:1] if fails else frozen
     assert during and all(count > 0 and young == sweep.COLLECT_EVERY for count, young in during)
     assert gc.get_freeze_count() == 0 and gc.get_threshold() == thresholds
+
+
+def test_a_collector_switched_off_stays_off_during_a_sweep():
+    # gc.set_threshold(0) (no automatic collection) is the user's choice: the sweep does not turn it on.
+    thresholds = gc.get_threshold()
+    gc.set_threshold(0, *thresholds[1:])
+    try:
+        with sweep._collector_eased():
+            assert gc.get_threshold()[0] == 0 and gc.get_freeze_count() > 0
+        assert gc.get_threshold()[0] == 0
+    finally:
+        gc.set_threshold(*thresholds)
