@@ -1,0 +1,98 @@
+"""What users install is the wheel: it is built from this tree, holds every module of the package, and,
+installed into a fresh venv outside the tree, runs every documented command.
+
+The fresh venv takes its dependencies from the package registry, as a user's ``pip install`` would
+(about a minute here); the commands then compile the kernels into the installed package's cache.
+"""
+
+import subprocess
+import sys
+import tarfile
+import venv
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, TINY_SPEC
+
+pytestmark = pytest.mark.slow
+
+PACKAGE = ROOT / "dlasweep"
+
+
+def _sources() -> set:
+    """Every file of the package in the tree, as paths relative to the tree's root."""
+    return {str(p.relative_to(ROOT)) for p in PACKAGE.rglob("*")
+            if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".nbi", ".nbc")}
+
+
+@pytest.fixture(scope="module")
+def dists(tmp_path_factory):
+    """The wheel and the sdist built from this tree (``python -m build``, isolated as pip would)."""
+    out = tmp_path_factory.mktemp("dist")
+    done = subprocess.run([sys.executable, "-m", "build", "--wheel", "--sdist", "--outdir", str(out), str(ROOT)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    (wheel,) = out.glob("dlasweep-*.whl")
+    (sdist,) = out.glob("dlasweep-*.tar.gz")
+    return wheel, sdist
+
+
+def test_the_wheel_holds_every_file_of_the_package(dists):
+    wheel, _ = dists
+    with zipfile.ZipFile(wheel) as archive:
+        shipped = {name for name in archive.namelist() if name.startswith("dlasweep/")}
+    assert shipped == _sources()
+
+
+def test_the_sdist_holds_every_file_of_the_package_and_its_tests(dists):
+    _, sdist = dists
+    with tarfile.open(sdist) as archive:
+        shipped = {name.split("/", 1)[1] for name in archive.getnames() if "/" in name}
+    assert _sources() <= shipped
+    assert {"pyproject.toml", "README.md"} <= shipped
+
+
+@pytest.fixture(scope="module")
+def installed(dists, tmp_path_factory):
+    """A fresh venv, outside the tree, with the wheel installed from its file: its ``dlasweep`` command."""
+    wheel, _ = dists
+    home = tmp_path_factory.mktemp("user")
+    venv.create(home / "venv", with_pip=True)
+    python = home / "venv" / "bin" / "python"
+    done = subprocess.run([str(python), "-m", "pip", "install", "-q", str(wheel)],
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return home / "venv" / "bin" / "dlasweep", home
+
+
+def _run(installed, *argv):
+    command, home = installed
+    done = subprocess.run([str(command), *map(str, argv)], cwd=home, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, f"{argv}: {done.stdout[-2000:]}{done.stderr[-3000:]}"
+    return done.stdout
+
+
+def test_the_installed_wheel_imports_from_site_packages_not_the_tree(installed):
+    command, home = installed
+    python = command.with_name("python")
+    where = subprocess.run([str(python), "-c", "import dlasweep.kernels.lattice, dlasweep.kernels.offlattice, "
+                            "dlasweep; print(dlasweep.__file__)"], cwd=home, capture_output=True, text=True)
+    assert where.returncode == 0, where.stderr
+    assert "site-packages" in where.stdout and str(ROOT) not in where.stdout
+
+
+def test_the_installed_wheel_runs_every_documented_command(installed):
+    _, home = installed
+    assert "grow" in _run(installed, "--help")
+    assert "1000 particles" in _run(installed, "grow", "-n", "1000", "-o", "one.nc")
+    assert "300 particles" in _run(installed, "grow", "-n", "300", "--model", "offlattice", "-o", "one.png")
+    assert "particles: 1000" in _run(installed, "info", "one.nc")
+    (home / "tiny.toml").write_text(TINY_SPEC)
+    assert "12 clusters" in _run(installed, "sweep", "tiny.toml", "-o", "tiny.nc")
+    assert "report written" in _run(installed, "report", "tiny.nc", "-o", "report")
+    assert (home / "report" / "dimension_vs_n.png").is_file()
+    assert "headline D" in _run(installed, "info", "tiny.nc")
+    _run(installed, "bench", "--quick", "-o", "bench")
+    assert (home / "bench" / "bench.nc").is_file()
