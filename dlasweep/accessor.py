@@ -2,13 +2,15 @@
 
 Registered by ``import dlasweep`` (see ``dlasweep/__init__.py``). A
 selection on the grid, ``ds.sel(stickiness=0.5).dla``, has the clusters of
-that selection (``store.selected_clusters``). Nothing here reads the
+that selection (``selection.selected_clusters``). Nothing here reads the
 per-particle arrays whole: a cluster is read as its own range of them.
 """
 
 from __future__ import annotations
 
 import xarray as xr
+
+from .selection import with_selected_clusters
 
 
 @xr.register_dataset_accessor("dla")
@@ -30,9 +32,7 @@ class DlaAccessor:
     def ds(self) -> xr.Dataset:
         """The dataset with only the clusters of its selection, and their particles (lazy as it was)."""
         if self._own is None:
-            from . import store  # here: registering the accessor loads no netCDF
-
-            self._own = store.with_selected_clusters(self._ds)
+            self._own = with_selected_clusters(self._ds)
         return self._own
 
     def __len__(self) -> int:

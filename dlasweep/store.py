@@ -46,6 +46,7 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
+from .selection import selected_clusters
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -548,42 +549,6 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
     params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS}
     return Cluster(cluster_points(ds, index), ds["diffusion_time"][start:stop].values, _status(ds, index),
                    _params.resolve(**params))
-
-
-def selected_clusters(ds: xr.Dataset) -> np.ndarray:
-    """Positions on ``cluster`` of the clusters that a selection on the grid keeps, in order.
-
-    ``ds.sel(stickiness=0.5)`` leaves the ``cluster`` dim whole (xarray does
-    not know that a cluster belongs to a configuration); a cluster belongs
-    to the selection when each of its ``cluster_<name>`` values is among the
-    dataset's values of ``<name>``, a scalar or a sweep axis. Unselected:
-    every cluster.
-    """
-    keep = np.ones(ds.sizes.get("cluster", 0), bool)
-    for name in ds.coords:
-        grid = str(name).removeprefix("cluster_")
-        if grid != name and grid in ds.coords:
-            keep &= np.isin(ds[name].values, np.atleast_1d(ds[grid].values))
-    return np.flatnonzero(keep)
-
-
-def with_selected_clusters(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` holding only the clusters of its selection (``selected_clusters``) and their particles.
-
-    The ``cluster`` and ``particle`` dims are subset alike, so positions on
-    ``cluster`` and the offsets the counts give stay consistent; lazy and
-    dask arrays stay lazy. Returns ``ds`` itself when every cluster is kept.
-    """
-    keep = selected_clusters(ds)
-    if len(keep) == ds.sizes.get("cluster", 0):
-        return ds
-    offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)]
-    ranges = [(offsets[i], offsets[i + 1]) for i in keep]
-    if len(keep) and all(a[1] == b[0] for a, b in zip(ranges, ranges[1:])):
-        particles = slice(ranges[0][0], ranges[-1][1])  # one block: a slice reads no index array
-    else:
-        particles = np.concatenate([np.arange(a, b) for a, b in ranges] or [np.zeros(0, np.int64)])
-    return ds.isel(cluster=keep, particle=particles) if "particle" in ds.dims else ds.isel(cluster=keep)
 
 
 def _index(ds, index, where) -> int:
