@@ -522,6 +522,7 @@ def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
     """
     index = _index(ds, index, where)
     start, stop = _particles_of(ds, index)
+    # With dim swept, 2D clusters sit in the z = 0 plane of a 3D ragged array.
     return np.stack([ds[a][start:stop].values for a in AXES[:_cluster_value(ds, "dim", index)]], axis=1)
 
 
@@ -546,7 +547,9 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
 
     index = _index(ds, index, where)
     start, stop = _particles_of(ds, index)
-    params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS}
+    # a parameter younger than the file takes its default, the behaviour of the code that wrote it
+    params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS
+              if name in ds.coords or f"cluster_{name}" in ds.coords}
     return Cluster(cluster_points(ds, index), ds["diffusion_time"][start:stop].values, _status(ds, index),
                    _params.resolve(**params))
 

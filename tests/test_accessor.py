@@ -83,6 +83,16 @@ def test_a_cluster_comes_back_with_its_diffusion_times_status_and_parameters(ds)
     assert png_size(c._repr_png_()) == (450, 450)
 
 
+def test_a_grown_cluster_comes_back_from_its_file(tmp_path):
+    grown = dla.grow(400, seed=5, model="offlattice", dim=3, stickiness=0.5)
+    store.save(store.cluster_dataset(grown, 5), tmp_path / "c.nc")
+    with dla.open_sweep(tmp_path / "c.nc") as ds:
+        c = ds.dla.cluster(0)
+    np.testing.assert_array_equal(c.points, grown.points)
+    np.testing.assert_array_equal(c.steps, grown.steps)
+    assert (c.status, c.params) == (grown.status, grown.params)
+
+
 def test_selection_on_the_grid_subsets_the_clusters(ds):
     sub = ds.sel(stickiness=0.5)
     np.testing.assert_array_equal(store.cluster_points(sub, seed=3), store.cluster_points(ds, stickiness=0.5, seed=3))
