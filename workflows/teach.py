@@ -57,10 +57,14 @@ def checked(n, seed, output) -> Path:
     return output
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        self.exit(2, f"teach.py: {message}\n")  # one line, naming what was wrong
+
+
 def command_line(argv, n, seed, output):
     """``n``, ``seed`` and ``output`` from the command line (the cell above gives the defaults); exit 2 on bad input."""
-    parser = argparse.ArgumentParser(description="Grow, look at, and measure two DLA clusters.")
-    parser.error = lambda message: parser.exit(2, f"teach.py: {message}\n")  # one line, naming what was wrong
+    parser = _Parser(description="Grow, look at, and measure two DLA clusters.")
     parser.add_argument("-o", "--output", type=Path, default=Path(output), help="folder for the pictures")
     parser.add_argument("-n", type=int, default=n, help=f"particles in each cluster (default {n})")
     parser.add_argument("--seed", type=int, default=seed, help=f"random seed (default {seed})")
