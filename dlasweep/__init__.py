@@ -5,6 +5,8 @@ Data flows one way: kernels -> ``grow`` -> ``measure`` -> ``fit`` -> ``sweep``
 """
 
 import importlib
+import importlib.abc
+import importlib.util
 import sys
 import types
 
@@ -16,8 +18,8 @@ from .spec import load_spec
 
 # dask, xarray and matplotlib load on first use, so that growing a cluster (a
 # benchmark probe, a worker) carries none of them
-_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "summarise": "analysis",
-         "report": "report"}
+_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "read_cluster": "store",
+         "summarise": "analysis", "report": "report"}
 
 
 class _Package(types.ModuleType):
@@ -33,6 +35,47 @@ class _Package(types.ModuleType):
 
 
 sys.modules[__name__].__class__ = _Package
+
+
+def _register_accessor():
+    from . import accessor  # noqa: F401 (importing it registers ``Dataset.dla``)
+
+
+class _AfterXarray(importlib.abc.MetaPathFinder):
+    """Registers ``ds.dla`` as soon as xarray is imported, whoever imports it.
+
+    Importing xarray here would double the time of ``import dlasweep``, which
+    a dask worker or a benchmark pays for nothing; waiting for xarray keeps
+    ``import dlasweep; import xarray as xr; xr.open_dataset(...).dla`` working.
+    """
+
+    looking = False  # while it asks the other finders for xarray itself
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "xarray" or self.looking:
+            return None
+        self.looking = True
+        try:
+            spec = importlib.util.find_spec(name)
+        finally:
+            self.looking = False
+        if spec is not None and spec.loader is not None:
+            load = spec.loader.exec_module
+
+            def exec_module(module):
+                load(module)
+                if self in sys.meta_path:
+                    sys.meta_path.remove(self)
+                _register_accessor()
+
+            spec.loader.exec_module = exec_module
+        return spec
+
+
+if "xarray" in sys.modules:
+    _register_accessor()
+else:
+    sys.meta_path.insert(0, _AfterXarray())
 
 
 def __getattr__(name):
@@ -57,6 +100,7 @@ __all__ = [
     "run_sweep",
     "open_sweep",
     "cluster_points",
+    "read_cluster",
     "report",
     "__version__",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import os
 import threading
 import time
@@ -17,6 +18,8 @@ WATCH_MARKS = 200
 """Counts at which a watched growth reports progress: every n / WATCH_MARKS particles."""
 WATCH_SECONDS = 0.2
 """How often a watched growth calls its ``progress``."""
+INLINE_INCHES, INLINE_DPI = 4.5, 100
+"""A cluster's inline picture in a notebook (``Cluster._repr_png_``): 450 pixels square, tens of KB."""
 
 
 @dataclass
@@ -53,6 +56,20 @@ class Cluster:
     @property
     def n(self) -> int:
         return len(self.points)
+
+    def _repr_png_(self) -> bytes:
+        """The cluster's picture (``pictures.cluster_figure``) as PNG bytes: how Jupyter shows a ``Cluster``.
+
+        At ``INLINE_INCHES`` and ``INLINE_DPI`` whatever its size, so a
+        large cluster shows blocks of sites (or disks under a pixel) rather
+        than a picture of megabytes.
+        """
+        from .pictures import cluster_figure  # here: growing a cluster needs no matplotlib
+
+        fig = cluster_figure(self.points, self.params, status=self.status, inches=INLINE_INCHES, dpi=INLINE_DPI)
+        png = io.BytesIO()
+        fig.savefig(png, format="png", dpi=fig.dpi)
+        return png.getvalue()
 
 
 def rng_for(seed) -> np.random.Generator:

@@ -46,6 +46,7 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
+from .selection import selected_clusters
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -458,11 +459,20 @@ class ParticleWriter:
         self.tmp.unlink(missing_ok=True)
 
 
-def open_sweep(path) -> xr.Dataset:
+def open_sweep(path, chunks=None) -> xr.Dataset:
     """Open a dataset written by dlasweep (a sweep or one cluster).
 
     Everything but the per-particle arrays is read at once, so a damaged
     file fails here rather than later.
+
+    Parameters
+    ----------
+    path : path
+    chunks : dict, int or "auto", optional
+        Passed to ``xarray.open_dataset``: the per-particle arrays become dask
+        arrays (``{}``: the file's own chunks, ``PARTICLE_CHUNK`` values), and
+        reading a cluster reads only the chunks that hold it. Default: lazy
+        arrays without dask.
 
     Raises
     ------
@@ -473,7 +483,7 @@ def open_sweep(path) -> xr.Dataset:
     if not path.is_file():
         raise StoreError(f"{path}: no such file")
     try:
-        ds = xr.open_dataset(path, engine="netcdf4")
+        ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks)
     except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...
         raise StoreError(f"{path}: not a readable netCDF file ({one_line(err)})") from None
     missing = [v for v in ("cluster_particles", "x", "y", "diffusion_time") if v not in ds.variables]
@@ -497,7 +507,9 @@ def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
     Parameters
     ----------
     ds : xarray.Dataset
-        From ``open_sweep`` or ``run_sweep``.
+        From ``open_sweep`` or ``run_sweep``, or a selection of one
+        (``ds.sel(stickiness=0.5)``): ``where`` then looks among the clusters
+        of the selection only (``selected_clusters``).
     index : int, optional
         Position along ``cluster`` (task order).
     **where
@@ -508,30 +520,85 @@ def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
     -------
     ndarray, (n, dim)
     """
-    if (index is None) == (not where):
-        raise TypeError("cluster_points: give either an index or parameter values")
-    if index is None:
-        index = _find_cluster(ds, where)
-    counts = ds["cluster_particles"].values
-    if not -len(counts) <= index < len(counts):
-        raise IndexError(f"cluster: index {index} is outside 0..{len(counts) - 1}")
-    index %= len(counts)
-    start = int(counts[:index].sum())
-    stop = start + int(counts[index])
+    index = _index(ds, index, where)
+    start, stop = _particles_of(ds, index)
     # With dim swept, 2D clusters sit in the z = 0 plane of a 3D ragged array.
-    dim = int(ds["cluster_dim"][index]) if "cluster_dim" in ds.coords else int(ds["dim"])
-    return np.stack([ds[a][start:stop].values for a in AXES[:dim]], axis=1)
+    return np.stack([ds[a][start:stop].values for a in AXES[:_cluster_value(ds, "dim", index)]], axis=1)
+
+
+def read_cluster(ds: xr.Dataset, index=None, **where):
+    """One stored cluster, as ``grow`` returned it: points, diffusion times, status and parameters.
+
+    Only that cluster's range of the per-particle arrays is read (with dask
+    chunks, only the chunks that hold it).
+
+    Parameters
+    ----------
+    ds, index, where
+        As for ``cluster_points``.
+
+    Returns
+    -------
+    dlasweep.grow.Cluster
+        ``status`` is the growth's outcome at the largest count; no
+        checkpoint times (a sweep keeps them in ``wall_time``).
+    """
+    from .grow import Cluster
+
+    index = _index(ds, index, where)
+    start, stop = _particles_of(ds, index)
+    # a parameter younger than the file takes its default, the behaviour of the code that wrote it
+    params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS
+              if name in ds.coords or f"cluster_{name}" in ds.coords}
+    return Cluster(cluster_points(ds, index), ds["diffusion_time"][start:stop].values, _status(ds, index),
+                   _params.resolve(**params))
+
+
+def _index(ds, index, where) -> int:
+    """The position on ``cluster`` that ``index`` or ``where`` names (``cluster_points``), checked."""
+    if (index is None) == (not where):
+        raise TypeError("cluster: give either an index or parameter values")
+    if index is None:
+        return _find_cluster(ds, where)
+    count = ds.sizes.get("cluster", 0)
+    if not -count <= index < count:
+        raise IndexError(f"cluster: index {index} is outside 0..{count - 1}")
+    return int(index) % count
+
+
+def _particles_of(ds, index) -> tuple:
+    """The range of ``particle`` that holds cluster ``index``."""
+    counts = ds["cluster_particles"].values
+    start = int(counts[:index].sum())
+    return start, start + int(counts[index])
+
+
+def _cluster_value(ds, name, index):
+    """Model parameter ``name`` of cluster ``index``: its ``cluster_<name>`` value, else the dataset's scalar."""
+    coord = f"cluster_{name}"
+    return (ds[coord][index] if coord in ds.coords else ds[name]).values.item()
+
+
+def _status(ds, index) -> str:
+    """Cluster ``index``'s growth outcome: at the largest count of a sweep, or its own in a grown cluster's file."""
+    status = ds["status"]
+    if status.dims == ("cluster",):
+        return STATUS_FLAGS[int(status[index])]
+    at = {d: ds[f"cluster_{d}"].values[index] for d in status.dims if d != "n_particles"}
+    return STATUS_FLAGS[int(status.sel(at).isel(n_particles=-1))]
 
 
 def _find_cluster(ds, where) -> int:
-    match = np.ones(ds.sizes["cluster"], bool)
+    """The position on ``cluster`` of the one cluster of ``ds``'s selection whose parameters are ``where``."""
+    candidates = selected_clusters(ds)
+    match = np.ones(len(candidates), bool)
     for name, value in where.items():
         coord = f"cluster_{name}"
         if coord not in ds.coords:
             known = [c[len("cluster_"):] for c in ds.coords if c.startswith("cluster_")]
             raise ValueError(f"{name}: not a cluster parameter (known: {', '.join(known)})")
-        match &= ds[coord].values == value
-    found = np.flatnonzero(match)
+        match &= ds[coord].values[candidates] == value
+    found = candidates[match]
     if len(found) != 1:
         raise ValueError(f"{where}: matches {len(found)} clusters, not one")
     return int(found[0])
