@@ -1,4 +1,4 @@
-"""The ``dlasweep`` command: grow, sweep, report, info, bench.
+"""The ``dlasweep`` command: grow, sweep, slurm, report, info, bench.
 
 Exit status: 0 success, 2 bad input (one line naming the bad key or value,
 nothing written), 1 failure at run time. Every input is checked, output
@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import atexit
 import contextlib
+import dataclasses
 import os
 import sys
 import tempfile
@@ -22,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from . import params as _params
-from . import store
+from . import slurm, store
 from ._version import __version__
 from .analysis import summarise
 from .fit import fit_mass_radius
@@ -129,6 +130,8 @@ def _parser() -> argparse.ArgumentParser:
     many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
     many.set_defaults(handler=_sweep)
 
+    _slurm_parser(commands)
+
     summary = commands.add_parser("report", allow_abbrev=False,
                                   help="tables and plots from a sweep's netCDF file")
     summary.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
@@ -233,12 +236,18 @@ def _follow(bar):
     return progress
 
 
-def _sweep(args) -> int:
+def _sweep_target(args) -> tuple:
+    """The spec and the output file of ``sweep`` (and ``slurm``), checked."""
     spec = load_spec(args.spec)
     out = args.output or Path(args.spec.stem + ".nc")
     if out.suffix != ".nc":
         raise UsageError(f"-o {out}: expected a file ending in .nc")
     _check_writable(out)
+    return spec, out
+
+
+def _sweep(args) -> int:
+    spec, out = _sweep_target(args)
     if args.workers is not None:
         if args.workers < 1:
             raise UsageError(f"--workers: {args.workers} is below 1")
@@ -262,6 +271,81 @@ def _sweep(args) -> int:
     stored = "" if ds.sizes["cluster"] == grown else f" ({ds.sizes['cluster']} stored)"
     print(f"{out}: {grown} clusters{stored} in {time.perf_counter() - start:.1f} s")
     return 0
+
+
+def _slurm_parser(commands):
+    """``dlasweep slurm``: the options of ``slurm.Options``, their defaults from it."""
+    default = slurm.Options()
+    launcher = commands.add_parser(
+        "slurm", allow_abbrev=False, help="run a sweep spec on SLURM, its dask workers in SLURM jobs",
+        description="Run a sweep spec on SLURM (needs pip install 'dlasweep[slurm]'). The dask scheduler "
+                    "runs in this process (a login node, or a small job of its own); each SLURM job is one "
+                    "dask worker with --cores threads. Jobs are added one at a time as tasks wait, a job that "
+                    "ends is replaced, workers retire before --walltime runs out, and on any exit (Ctrl-C: "
+                    "130, SIGTERM: 143) every job submitted is cancelled, finished tasks kept for --resume.")
+    launcher.add_argument("spec", type=Path, help="sweep spec (TOML)")
+    launcher.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
+    launcher.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
+    job = launcher.add_argument_group("each worker job")
+    job.add_argument("--partition", "--queue", dest="partition", help="SLURM partition (default: the default one)")
+    job.add_argument("--account", help="SLURM account")
+    job.add_argument("--cores", type=int, default=default.cores,
+                     help=f"CPUs of a job: one dask worker with this many threads (default {default.cores})")
+    job.add_argument("--memory", default=default.memory, help=f"memory of a job (default {default.memory})")
+    job.add_argument("--walltime", default=default.walltime,
+                     help=f"wall time of a job, in SLURM's format (default {default.walltime}); workers retire "
+                          f"before it ends")
+    job.add_argument("--max-jobs", type=int, default=default.max_jobs,
+                     help=f"most jobs at once (default {default.max_jobs})")
+    job.add_argument("--sbatch", action="append", default=[], metavar="OPTION",
+                     help="extra #SBATCH line, e.g. --sbatch '--qos=short' (repeatable)")
+    job.add_argument("--python", default=default.python,
+                     help="Python that runs the workers (default: this one, by absolute path)")
+    job.add_argument("--prologue", action="append", default=[], metavar="LINE",
+                     help="shell line run before the worker starts, e.g. 'module load ...' (repeatable)")
+    job.add_argument("--log-dir", type=Path, default=default.log_dir,
+                     help=f"folder for the jobs' slurm-<id>.out (default {default.log_dir})")
+    job.add_argument("--local-directory", metavar="DIR",
+                     help="worker scratch folder (default: dask's, in the job's temporary folder)")
+    job.add_argument("--death-timeout", type=float, default=default.death_timeout,
+                     help=f"seconds a worker waits for a lost scheduler before it exits "
+                          f"(default {default.death_timeout:g})")
+    net = launcher.add_argument_group("network")
+    net.add_argument("--interface", help="network interface of the scheduler and the workers, e.g. ib0 or lo")
+    net.add_argument("--scheduler-host", metavar="ADDRESS",
+                     help="address the scheduler listens on (default: --interface's, else the host name's)")
+    launcher.add_argument("--log-every", type=int, default=default.log_every, metavar="N",
+                          help=f"when stderr is not a terminal, a line per N finished tasks "
+                               f"(default {default.log_every})")
+    launcher.add_argument("--dry-run", action="store_true",
+                          help="check the options and the spec, print the job script and stop")
+    launcher.set_defaults(handler=_slurm)
+
+
+def _slurm(args) -> int:
+    """Check everything, then run ``sweep`` on a scheduler whose workers are SLURM jobs."""
+    options = slurm.Options(**{field.name: getattr(args, field.name) for field in dataclasses.fields(slurm.Options)})
+    _, out = _sweep_target(args)
+    try:
+        script = slurm.prepare(options, ask_slurm=not args.dry_run)
+    except slurm.OptionError as err:
+        name, space, reason = str(err).partition(" ")  # the message starts with the option's field name
+        raise UsageError(f"--{name.replace('_', '-')}{space}{reason}") from None
+    except slurm.SlurmError as err:
+        raise UsageError(str(err)) from None
+    if args.dry_run:
+        print(script)
+        return 0
+
+    def sweep(address) -> int:
+        argv = ["sweep", args.spec, "-o", out, "--scheduler", address, *(["--resume"] if args.resume else [])]
+        sweep_args = _parser().parse_args([str(a) for a in argv])  # the sweep's own defaults and checks
+        return sweep_args.handler(sweep_args)
+
+    def echo(line):
+        _say(f"dlasweep slurm {time.strftime('%H:%M:%S')} {line}")
+
+    return slurm.launch(options, sweep, echo, task_lines=not sys.stderr.isatty())
 
 
 def _report(args) -> int:

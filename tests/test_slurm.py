@@ -1,13 +1,16 @@
-"""The SLURM launcher (workflows/slurm.py) on a real one-node SLURM (workflows/slurm_local.py).
+"""``dlasweep slurm`` (dlasweep/slurm.py): its options without SLURM, then on a real one-node SLURM
+(workflows/slurm_local.py).
 
 The SLURM tests start the daemons once for the module (installing the packages
 with apt where needed, as root) and skip, saying why, where that cannot be done.
 Everything dask listens on is 127.0.0.1 (``--interface lo``). The launcher runs as
-a process of its own, its stderr not a terminal, so it writes progress lines.
+the installed ``dlasweep`` command in a process of its own, its stderr not a
+terminal, so it writes progress lines.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import os
 import re
@@ -23,6 +26,7 @@ from conftest import ROOT, science
 from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 import dlasweep as dla
+from dlasweep import slurm as launcher
 from dlasweep.spec import load_spec, parse_spec
 
 
@@ -34,14 +38,16 @@ def _workflow(name):
     return module
 
 
-launcher = _workflow("slurm")
 slurm_local = _workflow("slurm_local")
+
+DLASWEEP = Path(sys.executable).with_name("dlasweep")
+"""The installed command, beside this Python (a venv's bin/)."""
 
 QUICK = ROOT / "workflows" / "quick.toml"
 TASKS = 8
 """SLOW_SPEC's dask tasks: eight clusters of 1e5, each worth more than one task's TASK_SECONDS."""
 
-INTERRUPTED = "interrupted; finished tasks are kept, continue with --resume"
+INTERRUPTED = "finished tasks are kept, continue with --resume"
 
 
 # Without SLURM: options, wall time, the job script.
@@ -54,7 +60,7 @@ def test_walltime_reads_slurms_formats(text, seconds):
 
 @pytest.mark.parametrize("text", ["", "abc", "1:2:3:4", "-5", "1-", "2h"])
 def test_walltime_refuses_other_text(text):
-    with pytest.raises(launcher.UsageError, match="--walltime"):
+    with pytest.raises(launcher.OptionError, match="^walltime"):
         launcher.walltime_seconds(text)
 
 
@@ -65,7 +71,7 @@ def test_lifetime_ends_every_worker_before_its_walltime():
         life, stagger = launcher.lifetime(walltime)
         assert life - stagger > 0
         assert life + stagger <= walltime - max(launcher.RETIRE_SECONDS, walltime // 20)
-    with pytest.raises(launcher.UsageError, match="too short"):
+    with pytest.raises(launcher.OptionError, match="too short"):
         launcher.lifetime(launcher.MIN_WALLTIME - 1)
 
 
@@ -82,7 +88,16 @@ def test_jobs_to_hold_keeps_one_job_waiting_and_cancels_none(wanted, arrived, pl
     assert launcher.jobs_to_hold(wanted, arrived, planned, busy) == hold
 
 
-def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch, capsys):
+def test_help_lists_the_command_and_every_option(run_cli):
+    status, out, _ = run_cli("--help")
+    assert status == 0 and "slurm     run a sweep spec on SLURM" in out
+    status, out, _ = run_cli("slurm", "--help")
+    assert status == 0 and "pip install 'dlasweep[slurm]'" in out
+    for field in dataclasses.fields(launcher.Options):
+        assert f"--{field.name.replace('_', '-')} " in out
+
+
+def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch, run_cli):
     from distributed import Scheduler
 
     def no_scheduler(*args, **kwargs):
@@ -91,16 +106,17 @@ def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch,
     monkeypatch.setattr(Scheduler, "__init__", no_scheduler)
     monkeypatch.chdir(tmp_path)
     handler = signal.getsignal(signal.SIGINT)
-    status = launcher.main([QUICK, "--dry-run", "--cores", "4", "--memory", "3GB", "--walltime", "10:00",
-                            "--interface", "lo", "--sbatch=--qos=short", "--partition", "big",
-                            "--account", "dla", "--death-timeout", "30", "--local-directory", "/scratch/me"])
-    script = capsys.readouterr().out
-    assert status == 0
+    status, script, err = run_cli("slurm", QUICK, "--dry-run", "--cores", "4", "--memory", "3GB",
+                                  "--walltime", "10:00", "--interface", "lo", "--sbatch=--qos=short",
+                                  "--partition", "big", "--account", "dla", "--death-timeout", "30",
+                                  "--local-directory", "/scratch/me", "--prologue", "module load gcc")
+    assert status == 0 and err == ""
     assert signal.getsignal(signal.SIGINT) is handler  # dask-jobqueue's sys.exit() handler undone
     for line in ("#SBATCH -J dlasweep", "#SBATCH --cpus-per-task=4", "#SBATCH --mem=3G", "#SBATCH -t 10:00",
                  "#SBATCH -p big", "#SBATCH -A dla", "#SBATCH --qos=short",
                  f"#SBATCH --output={tmp_path.resolve()}/slurm-logs/slurm-%j.out"):
         assert line + "\n" in script
+    assert "\nmodule load gcc\n" in script
     command = script.strip().splitlines()[-1]
     assert command.startswith(f"{sys.executable} -m distributed.cli.dask_worker tcp://127.0.0.1:PORT ")
     # One worker of four threads; it retires 8.5 +- 0.5 min into a 10 min job.
@@ -112,29 +128,46 @@ def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch,
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--walltime", "2h"], "--walltime 2h: expected SLURM's format"),
-    (["--walltime", "2"], "--walltime: 120 s is too short"),
-    (["--cores", "0"], "--cores: 0 is below 1"),
-    (["--log-every", "0"], "--log-every: 0 is below 1"),
-    (["--memory", "lots"], "--memory lots: expected an amount like 16GB"),
-    (["--interface", "nosuch0"], "--interface nosuch0: no such network interface here"),
-    (["--python", "/no/python"], "--python /no/python: not an executable file"),
-    (["--frobnicate"], "unrecognized arguments: --frobnicate"),
+    (["--walltime", "2h"], "dlasweep slurm: --walltime 2h: expected SLURM's format"),
+    (["--walltime", "2"], "dlasweep slurm: --walltime: 120 s is too short"),
+    (["--cores", "0"], "dlasweep slurm: --cores: 0 is below 1"),
+    (["--max-jobs", "0"], "dlasweep slurm: --max-jobs: 0 is below 1"),
+    (["--log-every", "0"], "dlasweep slurm: --log-every: 0 is below 1"),
+    (["--death-timeout", "0"], "dlasweep slurm: --death-timeout: 0 is not positive"),
+    (["--memory", "lots"], "dlasweep slurm: --memory lots: expected an amount like 16GB"),
+    (["--interface", "nosuch0"], "dlasweep slurm: --interface nosuch0: no such network interface here"),
+    (["--python", "/no/python"], "dlasweep slurm: --python /no/python: not an executable file"),
+    (["-o", "out.txt"], "dlasweep slurm: -o out.txt: expected a file ending in .nc"),
+    (["-o", "no/such/out.nc"], "dlasweep slurm: -o no/such/out.nc: folder no/such does not exist"),
+    (["--frobnicate"], "dlasweep: unrecognized arguments: --frobnicate"),
 ])
-def test_bad_options_exit_2_with_one_line(argv, message, tmp_path, monkeypatch, capsys):
+def test_bad_options_exit_2_with_one_line(argv, message, tmp_path, monkeypatch, run_cli):
     monkeypatch.chdir(tmp_path)
-    assert launcher.main([QUICK, "--dry-run", *argv]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith(f"slurm.py: {message}") and err.count("\n") == 1
+    status, out, err = run_cli("slurm", QUICK, "--dry-run", *argv)
+    assert status == 2 and out == ""
+    assert err.startswith(message) and err.count("\n") == 1, err
     assert not any(tmp_path.iterdir())
 
 
-def test_a_bad_spec_exits_2(tmp_path, capsys):
+def test_a_bad_spec_exits_2(tmp_path, run_cli):
     spec = tmp_path / "bad.toml"
     spec.write_text("[grid]\nn_particles = [100]\nseeds = -1\n")
-    assert launcher.main([spec, "--dry-run"]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("slurm.py: ") and "seeds" in err and err.count("\n") == 1
+    status, _, err = run_cli("slurm", spec, "--dry-run")
+    assert status == 2 and err.startswith("dlasweep slurm: ") and "seeds" in err and err.count("\n") == 1
+
+
+def test_without_dask_jobqueue_one_line_names_the_extra(tmp_path):
+    """The installed command, its import of dask_jobqueue made to fail (as where the extra is missing)."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text("import sys\nsys.modules['dask_jobqueue'] = None  # import fails\n")
+    run = tmp_path / "run"
+    run.mkdir()
+    done = subprocess.run([DLASWEEP, "slurm", QUICK, "--dry-run"], capture_output=True, text=True, cwd=run,
+                          env=dict(os.environ, PYTHONPATH=site), timeout=120)
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == "dlasweep slurm: needs dask-jobqueue: pip install 'dlasweep[slurm]'\n"
+    assert not any(run.iterdir())
 
 
 def test_slurm_is_not_started_without_root(monkeypatch):
@@ -181,15 +214,15 @@ def slow_reference():
 
 
 class Launcher:
-    """workflows/slurm.py as a process of its own, its stderr in a file."""
+    """``dlasweep slurm`` as a process of its own, its stdout and stderr in a file."""
 
     def __init__(self, slurm, folder: Path, spec, *options, name="launcher", path=None):
         self.out = folder / "out.nc"
         self.log = folder / f"{name}.log"
-        env = dict(slurm.env, PYTHONPATH=os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
+        env = dict(slurm.env)
         if path:
             env["PATH"] = f"{path}{os.pathsep}{env['PATH']}"
-        argv = [sys.executable, ROOT / "workflows" / "slurm.py", spec, "-o", self.out, "--cores", slurm.cpus,
+        argv = [DLASWEEP, "slurm", spec, "-o", self.out, "--cores", slurm.cpus,
                 "--memory", "1GB", "--walltime", "10:00", "--interface", "lo", "--log-every", "1",
                 "--log-dir", folder / "slurm-logs", *options]
         with open(self.log, "wb") as log:
@@ -295,7 +328,7 @@ def test_sigterm_in_a_queue_wait_exits_143_and_cancels_the_waiting_job(queue, tm
         run.process.send_signal(signal.SIGTERM)
         assert run.wait(60) == 143, run.text()
     log = run.text()
-    assert f"dlasweep sweep: {INTERRUPTED}" in log and "interrupted (SIGTERM); finished tasks" in log
+    assert f"interrupted (SIGTERM); {INTERRUPTED}" in log
     assert not held_jobs(queue, run.submitted()), log
 
 
@@ -307,7 +340,7 @@ def test_ctrl_c_mid_sweep_exits_130_keeps_finished_tasks_and_resume_completes(qu
         wait_for(lambda: finished_clusters(run.out), "a first saved cluster", timeout=120)
         run.process.send_signal(signal.SIGINT)
         assert run.wait(60) == 130, run.text()
-    assert f"dlasweep sweep: {INTERRUPTED}" in run.text()
+    assert f"interrupted (SIGINT); {INTERRUPTED}" in run.text()
     assert not held_jobs(queue, run.submitted()), run.text()
     kept = len(finished_clusters(run.out))
     assert 1 <= kept < TASKS, run.text()
@@ -331,7 +364,7 @@ def test_options_beyond_the_partition_exit_2_and_submit_nothing(argv, message, q
     with Launcher(queue, tmp_path, QUICK, *argv) as run:
         assert run.wait(60) == 2
     line = run.text()
-    assert line.startswith(f"slurm.py: {message.format(cpus=queue.cpus)}") and line.count("\n") == 1, line
+    assert line.startswith(f"dlasweep slurm: {message.format(cpus=queue.cpus)}") and line.count("\n") == 1, line
     assert queue.jobs() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["launcher.log"]
 
