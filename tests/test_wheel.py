@@ -56,12 +56,12 @@ def test_the_sdist_holds_every_file_of_the_package_and_its_tests(dists):
 
 @pytest.fixture(scope="module")
 def installed(dists, tmp_path_factory):
-    """A fresh venv, outside the tree, with the wheel installed from its file: its ``dlasweep`` command."""
+    """A fresh venv, outside the tree, with the wheel and its ``slurm`` extra installed: its ``dlasweep``."""
     wheel, _ = dists
     home = tmp_path_factory.mktemp("user")
     venv.create(home / "venv", with_pip=True)
     python = home / "venv" / "bin" / "python"
-    done = subprocess.run([str(python), "-m", "pip", "install", "-q", str(wheel)],
+    done = subprocess.run([str(python), "-m", "pip", "install", "-q", f"{wheel}[slurm]"],
                           capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]
     return home / "venv" / "bin" / "dlasweep", home
@@ -96,3 +96,4 @@ def test_the_installed_wheel_runs_every_documented_command(installed):
     assert "headline D" in _run(installed, "info", "tiny.nc")
     _run(installed, "bench", "--quick", "-o", "bench")
     assert (home / "bench" / "bench.nc").is_file()
+    assert "#SBATCH" in _run(installed, "slurm", "tiny.toml", "--dry-run")
