@@ -409,8 +409,9 @@ def _check_writable(path: Path, folder=False):
 
 
 def _check_new(path: Path, replace: bool, why=""):
-    """Refuse an existing output file unless ``replace``: nothing is overwritten unasked."""
-    if path.exists() and not replace:
+    """Refuse an existing output file unless ``replace``: nothing is overwritten unasked (a link to nowhere
+    neither: writing replaces the link)."""
+    if (path.exists() or path.is_symlink()) and not replace:
         raise UsageError(f"-o {path}: exists{why}; pass --force to replace it")
 
 

@@ -463,6 +463,13 @@ def test_grow_refuses_an_existing_output_unless_force(name, tmp_path):
     assert out.read_bytes() != b"precious" and files_under(tmp_path) == {Path(name)}
 
 
+def test_grow_refuses_a_link_to_nowhere_as_an_existing_output(run_cli, tmp_path):
+    out = tmp_path / "out.nc"
+    out.symlink_to(tmp_path / "elsewhere.nc")
+    assert refused(*run_cli("grow", "-n", "50", "-o", out), f"-o {out}: exists")
+    assert out.is_symlink() and files_under(tmp_path) == {Path("out.nc")}
+
+
 @pytest.mark.parametrize("options, named", [([], "--force"), (["--resume"], "nothing left to resume"),
                                             (["--resume"], "--force")])
 def test_sweep_refuses_an_existing_output(options, named, write_spec, tmp_path):
