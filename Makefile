@@ -1,7 +1,7 @@
 PY := .venv/bin/python
 STAMP := .venv/.installed
 
-.PHONY: sweep test test-slurm bench clean
+.PHONY: sweep example test test-slurm bench clean distclean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -9,10 +9,15 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	touch $(STAMP)
 
+# Its outputs are ignored by git. --resume continues a run that was interrupted, --force replaces the last one's file.
 sweep: $(STAMP)
 	mkdir -p results
-	.venv/bin/dlasweep sweep workflows/quick.toml -o results/quick.nc
+	.venv/bin/dlasweep sweep workflows/quick.toml -o results/quick.nc --resume --force
 	.venv/bin/dlasweep report results/quick.nc -o results/quick
+
+# The committed example of the quick report: refresh it when the report changes.
+example: sweep
+	.venv/bin/dlasweep report results/quick.nc -o results/examples/quick
 
 test: $(STAMP)
 	$(PY) -m pytest
@@ -24,5 +29,10 @@ test-slurm: $(STAMP)
 bench: $(STAMP)
 	.venv/bin/dlasweep bench -o results/bench
 
+# The sweep's outputs and the parts of an interrupted one (the committed results stay).
 clean:
-	rm -rf .venv results/*.parts
+	rm -rf results/quick.nc results/quick results/*.parts
+
+# clean, and the venv.
+distclean: clean
+	rm -rf .venv

@@ -30,10 +30,10 @@ from .fit import fit_mass_radius
 from .grow import compiled, grow
 from .measure import radius_of_gyration
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
-from .report import plot_bench, report
+from .report import ReportFolderError, earlier_report, plot_bench, report
 from .spec import MAX_PARTICLES, SpecError, load_spec
 from .store import one_line as _one_line
-from .sweep import ResumeError, run_sweep
+from .sweep import Interrupted, ResumeError, run_sweep
 
 GROW_SUFFIXES = (".nc", ".png", ".svg")
 
@@ -83,9 +83,8 @@ def main(argv=None) -> int:
         with contextlib.suppress(OSError):
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
-    except KeyboardInterrupt:
-        kept = "; finished tasks are kept, continue with --resume" if command == "dlasweep sweep" else ""
-        _say(f"{command}: interrupted{kept}")
+    except KeyboardInterrupt as err:
+        _say(f"{command}: interrupted{_kept(err)}")
         return 130
     except (UsageError, SpecError, store.StoreError, ResumeError) as err:
         _say(f"{command}: {_one_line(err)}")
@@ -112,6 +111,7 @@ def _parser() -> argparse.ArgumentParser:
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
     one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
+    one.add_argument("--force", action="store_true", help="replace the output file if it exists")
     look = one.add_argument_group("pictures (.png, .svg)")
     look.add_argument("--size-inches", type=float, metavar="W",
                       help=f"side of the square picture in inches (default {DEFAULT_INCHES:g})")
@@ -127,7 +127,9 @@ def _parser() -> argparse.ArgumentParser:
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
     many.add_argument("--workers", type=int, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
-    many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
+    many.add_argument("--resume", action="store_true",
+                      help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists")
+    many.add_argument("--force", action="store_true", help="replace OUT if it exists")
     many.set_defaults(handler=_sweep)
 
     _slurm_parser(commands)
@@ -135,7 +137,8 @@ def _parser() -> argparse.ArgumentParser:
     summary = commands.add_parser("report", allow_abbrev=False,
                                   help="tables and plots from a sweep's netCDF file")
     summary.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
-    summary.add_argument("-o", "--output", type=Path, help="output folder (default: DATASET without .nc)")
+    summary.add_argument("-o", "--output", type=Path,
+                         help="output folder (default: DATASET without .nc); an earlier report there is replaced")
     summary.set_defaults(handler=_report)
 
     about = commands.add_parser("info", allow_abbrev=False,
@@ -168,6 +171,7 @@ def _grow(args) -> int:
     if out.suffix.lower() not in GROW_SUFFIXES:
         raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
     _check_writable(out)
+    _check_new(out, args.force)
     if not 1 <= args.n <= MAX_PARTICLES:
         raise UsageError(f"-n: {args.n} is not in [1, {MAX_PARTICLES}]")
     if args.seed < 0:
@@ -243,6 +247,9 @@ def _sweep_target(args) -> tuple:
     if out.suffix != ".nc":
         raise UsageError(f"-o {out}: expected a file ending in .nc")
     _check_writable(out)
+    # Resuming finishes the file an earlier run was writing: it may replace the file it left.
+    _check_new(out, args.force or (args.resume and Path(f"{out}.parts").exists()),
+               "; nothing left to resume" if args.resume else "")
     return spec, out
 
 
@@ -285,7 +292,9 @@ def _slurm_parser(commands):
                     "130, SIGTERM: 143) every job submitted is cancelled, finished tasks kept for --resume.")
     launcher.add_argument("spec", type=Path, help="sweep spec (TOML)")
     launcher.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
-    launcher.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
+    launcher.add_argument("--resume", action="store_true",
+                          help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists")
+    launcher.add_argument("--force", action="store_true", help="replace OUT if it exists")
     job = launcher.add_argument_group("each worker job")
     job.add_argument("--partition", "--queue", dest="partition", help="SLURM partition (default: the default one)")
     job.add_argument("--account", help="SLURM account")
@@ -338,7 +347,8 @@ def _slurm(args) -> int:
         return 0
 
     def sweep(address) -> int:
-        argv = ["sweep", args.spec, "-o", out, "--scheduler", address, *(["--resume"] if args.resume else [])]
+        argv = ["sweep", args.spec, "-o", out, "--scheduler", address,
+                *(["--resume"] if args.resume else []), *(["--force"] if args.force else [])]
         sweep_args = _parser().parse_args([str(a) for a in argv])  # the sweep's own defaults and checks
         return sweep_args.handler(sweep_args)
 
@@ -349,8 +359,13 @@ def _slurm(args) -> int:
 
 
 def _report(args) -> int:
+    _check_dataset(args.dataset)
     outdir = args.output or args.dataset.with_suffix("")
     _check_writable(outdir, folder=True)
+    try:
+        earlier_report(outdir)
+    except ReportFolderError as err:
+        raise UsageError(f"-o {err}") from None
     ds = store.open_sweep(args.dataset)
     if "box_count" not in ds:
         ds.close()
@@ -366,6 +381,7 @@ def _report(args) -> int:
 
 def _info(args) -> int:
     """Print what a dataset holds, in the project's words (``ncdump -h`` gives the raw header)."""
+    _check_dataset(args.dataset)
     ds = store.open_sweep(args.dataset)
     try:
         lines = _sweep_info(ds) if "box_count" in ds else _cluster_info(ds)
@@ -477,6 +493,29 @@ def _check_writable(path: Path, folder=False):
             pass
     except OSError:
         raise UsageError(f"-o {path}: folder {parent} is not writable") from None
+
+
+def _check_new(path: Path, replace: bool, why=""):
+    """Refuse an existing output file unless ``replace``: nothing is overwritten unasked (a link to nowhere
+    neither: writing replaces the link)."""
+    if (path.exists() or path.is_symlink()) and not replace:
+        raise UsageError(f"-o {path}: exists{why}; pass --force to replace it")
+
+
+def _check_dataset(path: Path):
+    """Refuse a folder given as a dataset (a report's folder, say) in one line; ``open_sweep`` checks the rest."""
+    if path.is_dir():
+        raise UsageError(f"{path}: is a folder, not a netCDF file written by `dlasweep sweep` or `dlasweep grow`")
+
+
+def _kept(interrupt) -> str:
+    """What an interrupted sweep kept, as the end of its line; nothing for other commands."""
+    if not isinstance(interrupt, Interrupted):
+        return ""
+    if interrupt.parts is None:
+        return "; no cluster had finished, nothing is kept"
+    clusters = "1 finished cluster" if interrupt.kept == 1 else f"{interrupt.kept} finished clusters"
+    return f"; {clusters} kept in {interrupt.parts}, continue with --resume"
 
 
 def _say(line: str):

@@ -4,8 +4,10 @@ Draws and writes what ``analysis.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
 Rg, costs), read through ``analysis.Readout`` (rows, labels, the exact
 reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
-``summary.md``, PNG plots and ``report.md`` into one folder. Plots the
-dataset has no data for are skipped, never drawn empty.
+``summary.md``, PNG plots and ``report.md`` into one folder, which holds
+one report: an earlier report there is removed first (``files`` names
+everything a report may write), a folder holding anything else is refused.
+Plots the dataset has no data for are skipped, never drawn empty.
 """
 
 from __future__ import annotations
@@ -36,6 +38,9 @@ FAILURE_AXES = ("kill_factor", "step", "size", "stickiness")
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
+TABLES = ("summary.csv", "summary.md")
+WRITEUP = "report.md"
+
 _MAX_PANELS = 12
 _MIN_WIDTH = 6.5
 """Inches: the narrowest figure, whatever its panels."""
@@ -59,8 +64,13 @@ def report(ds, outdir, progress=None) -> list:
     list of Path
         Every file written: ``summary.csv``, ``summary.md``, the plots that
         the dataset has data for, and ``report.md``.
+
+    Raises
+    ------
+    ReportFolderError
+        When ``outdir`` holds anything but an earlier report; nothing is written then.
     """
-    steps = ["summary", "tables", *_PLOTS, "report.md", ""]
+    steps = ["summary", "tables", *_PLOTS, WRITEUP, ""]
     done = iter(range(len(steps)))
 
     def tell():
@@ -69,11 +79,13 @@ def report(ds, outdir, progress=None) -> list:
             progress(k, len(steps) - 1, steps[k])
 
     out = Path(outdir)
+    for name in earlier_report(out):
+        (out / name).unlink()
     out.mkdir(parents=True, exist_ok=True)
     tell()
     sweep = Readout(ds)
     tell()
-    written = [_write_csv(sweep, out / "summary.csv"), _write_table(sweep, out / "summary.md")]
+    written = [_write_csv(sweep, out / TABLES[0]), _write_table(sweep, out / TABLES[1])]
     figures = {}
     for name, draw in _PLOTS.items():
         tell()
@@ -82,9 +94,40 @@ def report(ds, outdir, progress=None) -> list:
             figures[name] = caption
             written.append(out / f"{name}.png")
     tell()
-    written.append(_write_report(sweep, figures, out / "report.md"))
+    written.append(_write_report(sweep, figures, out / WRITEUP))
     tell()
     return written
+
+
+class ReportFolderError(ValueError):
+    """A report's folder that holds something other than a report."""
+
+
+def files() -> set:
+    """The name of every file a report may write."""
+    return {*TABLES, *(f"{name}.png" for name in _PLOTS), WRITEUP}
+
+
+def earlier_report(outdir) -> list:
+    """The files of an earlier report in ``outdir``, which the next one replaces (none when it is missing).
+
+    Raises
+    ------
+    ReportFolderError
+        When ``outdir`` is not a folder, or holds anything a report does not write.
+    """
+    out = Path(outdir)
+    if not out.exists():
+        return []
+    if not out.is_dir():
+        raise ReportFolderError(f"{out}: exists and is not a folder")
+    names = sorted(entry.name for entry in out.iterdir())
+    foreign = [name for name in names if name not in files() or not (out / name).is_file()]
+    if foreign:
+        more = f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else ""
+        raise ReportFolderError(f"{out}: holds {foreign[0]}{more}, which is not a report's; a report folder "
+                                "holds one report: choose an empty or new folder")
+    return names
 
 
 def _cluster_points(ds, i):

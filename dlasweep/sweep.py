@@ -65,6 +65,7 @@ from . import measure, store
 from .analysis import growth_counts, headline
 from .grow import compiled, grow, grow_many
 from .params import STATUSES
+from .progress import Lines
 from .spec import Spec, differences, load_spec
 
 MANIFEST, LOCK, PARTICLES = "manifest.json", ".lock", "particles.nc"
@@ -92,6 +93,15 @@ class ResumeError(ValueError):
     """The parts folder does not fit this run (changed spec, or no --resume), or another run holds it."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a sweep that writes a file: ``kept`` finished clusters stay in the parts folder
+    ``parts`` for ``--resume``; ``parts`` is None when the folder was removed, nothing having finished."""
+
+    def __init__(self, kept, parts):
+        super().__init__(kept, parts)
+        self.kept, self.parts = kept, parts
+
+
 def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
               scheduler_file=None):
     """Grow and measure every cluster of a spec.
@@ -112,7 +122,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         Threads of the embedded cluster, i.e. tasks run at once (default:
         ``[run] workers``, else the usable cores).
     progress : bool, optional
-        Show a progress bar (default: when stderr is a terminal).
+        Show a progress bar on stderr (True), or nothing (False). Default: a
+        bar on a terminal, else a line each 10% of the clusters or 10 s
+        (``progress.Lines``), for a log.
     scheduler_file : path, optional
         Connect to the scheduler described in this file.
 
@@ -132,6 +144,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     """
     if not isinstance(spec, Spec):
         spec = load_spec(spec)
+    lines = progress is None and not sys.stderr.isatty()
     if progress is None:
         progress = sys.stderr.isatty()
     # Tasks the sweep may run at most: the embedded cluster needs no more threads.
@@ -150,8 +163,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                     dask_client = session.enter_context(_connected(client, scheduler_file, workers or spec.workers, most,
                                                                    functools.partial(_load_kernels, spec)))
                     session.enter_context(_collector_eased())
-                bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
-                           desc=spec.name, disable=not progress, file=sys.stderr)
+                bar = (Lines(batch.n_tasks, batch.n_tasks - len(todo), spec.name) if lines else
+                       tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
+                            desc=spec.name, disable=not progress, file=sys.stderr))
                 with bar:
                     _compute(dask_client, batch, todo, parts, bar, stream)
             ds, failed = _assemble(batch, parts)
@@ -422,6 +436,11 @@ class Parts:
     def finished(self, key) -> bool:
         return key in self.where and not self.where[key][2]
 
+    @property
+    def n_finished(self) -> int:
+        """How many clusters the folder holds finished (failed ones are computed again on resume)."""
+        return sum(not failed for _, _, failed in self.where.values())
+
     @contextlib.contextmanager
     def _members(self, file, kept, names):
         """A part's members: those ``kept`` in memory when they hold every one of ``names``, else its file."""
@@ -512,8 +531,10 @@ def _parts_folder(spec, out, resume):
             _check_manifest(path, identity, resume)
         try:
             yield parts
-        except BaseException:
+        except BaseException as err:
             parts.done = parts.done or (made and not any(path.glob("*.npz")))
+            if isinstance(err, KeyboardInterrupt) and not isinstance(err, Interrupted):
+                raise (Interrupted(0, None) if parts.done else Interrupted(parts.n_finished, path)) from err
             raise
         finally:
             if parts.done:

@@ -3,9 +3,13 @@ sweeps end to end; what ``info`` tells of a file."""
 
 import contextlib
 import io
+import re
 import shutil
+import signal
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import dask
 import netCDF4
@@ -16,8 +20,9 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import dlasweep as dla
-from conftest import TINY_SPEC, files_under, science
-from dlasweep import cli, store
+from conftest import ROOT, TINY_SPEC, files_under, science
+from dlasweep import cli, store, sweep
+from dlasweep.report import files as report_files
 from dlasweep.params import PARAMETERS
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
@@ -429,3 +434,181 @@ def test_a_reader_that_leaves_ends_the_command_quietly(tiny_sweep, monkeypatch, 
     monkeypatch.setattr(sys, "stdout", Closed())
     assert cli.main(["info", str(tiny_sweep[3] / "tiny.nc")]) == 141
     assert capsys.readouterr().err == ""
+
+
+# Nothing lost, nothing stale (issue 24, items 8-13) -------------------------
+
+def command(*argv, cwd=None):
+    """The real command in a subprocess: (exit status, stdout, stderr)."""
+    done = subprocess.run([sys.executable, "-m", "dlasweep", *map(str, argv)], capture_output=True, text=True,
+                          timeout=600, cwd=cwd)
+    return done.returncode, done.stdout, done.stderr
+
+
+def refused(status, out, err, *named) -> bool:
+    """Exit 2 with one line on stderr that holds every one of ``named``, nothing on stdout."""
+    lines = err.strip().splitlines()
+    return status == 2 and out == "" and len(lines) == 1 and all(name in lines[0] for name in named)
+
+
+@pytest.mark.parametrize("name", ["out.nc", "out.png"])
+def test_grow_refuses_an_existing_output_unless_force(name, tmp_path):
+    out = tmp_path / name
+    out.write_text("precious")
+    result = command("grow", "-n", "50", "-o", out)
+    assert refused(*result, f"-o {out}: exists", "--force"), result
+    assert out.read_text() == "precious" and files_under(tmp_path) == {Path(name)}
+    status, _, err = command("grow", "-n", "50", "-o", out, "--force")
+    assert status == 0, err
+    assert out.read_bytes() != b"precious" and files_under(tmp_path) == {Path(name)}
+
+
+def test_grow_refuses_a_link_to_nowhere_as_an_existing_output(run_cli, tmp_path):
+    out = tmp_path / "out.nc"
+    out.symlink_to(tmp_path / "elsewhere.nc")
+    assert refused(*run_cli("grow", "-n", "50", "-o", out), f"-o {out}: exists")
+    assert out.is_symlink() and files_under(tmp_path) == {Path("out.nc")}
+
+
+@pytest.mark.parametrize("options, named", [([], "--force"), (["--resume"], "nothing left to resume"),
+                                            (["--resume"], "--force")])
+def test_sweep_refuses_an_existing_output(options, named, write_spec, tmp_path):
+    out = tmp_path / "out.nc"
+    out.write_text("precious")
+    spec = write_spec()
+    before = files_under(tmp_path)
+    result = command("sweep", spec, "-o", out, *options)
+    assert refused(*result, f"-o {out}: exists", named), result
+    assert files_under(tmp_path) == before and out.read_text() == "precious"
+
+
+def test_sweep_with_force_replaces_the_output(run_cli, write_spec, tmp_path, dask_cluster):
+    out = tmp_path / "out.nc"
+    out.write_text("precious")
+    status, _, err = run_cli("sweep", write_spec(), "-o", out, "--force", "--scheduler", dask_cluster.scheduler_address)
+    assert status == 0, err
+    with store.open_sweep(out) as ds:
+        assert ds.sizes["cluster"] == 12
+
+
+def test_a_report_replaces_an_earlier_report_whole(tiny_sweep, run_cli, write_spec, tmp_path, dask_cluster):
+    folder = tmp_path / "report"
+    assert run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", folder)[0] == 0
+    first = {p.name for p in folder.iterdir()}
+    bare = tmp_path / "bare.nc"  # no positions stored: no gallery, no diffusion times
+    spec = write_spec(TINY_SPEC.replace("root_seed = 12345", 'root_seed = 12345\nstore_clusters = "none"'))
+    assert run_cli("sweep", spec, "-o", bare, "--scheduler", dask_cluster.scheduler_address)[0] == 0
+    status, out, err = command("report", bare, "-o", folder)
+    assert status == 0, err
+    second = {p.name for p in folder.iterdir()}
+    assert {"gallery.png", "diffusion_times.png"} <= first - second and second <= report_files()
+    assert "bare.nc -o " in (folder / "report.md").read_text()  # the second report's, whole
+
+
+@pytest.mark.parametrize("foreign", ["notes.txt", "run2"])
+def test_a_report_folder_holding_other_files_is_refused(foreign, tiny_sweep, tmp_path):
+    folder = tmp_path / "report"
+    folder.mkdir()
+    (folder / "summary.md").write_text("mine")
+    (folder / foreign).mkdir() if "." not in foreign else (folder / foreign).write_text("mine")
+    before = files_under(tmp_path)
+    result = command("report", tiny_sweep[3] / "tiny.nc", "-o", folder)
+    assert refused(*result, f"-o {folder}: holds {foreign}", "not a report's"), result
+    assert files_under(tmp_path) == before and (folder / "summary.md").read_text() == "mine"
+
+
+@pytest.mark.parametrize("what", ["report", "info"])
+def test_a_folder_given_as_a_dataset_is_named_a_folder(what, tmp_path):
+    (tmp_path / "results").mkdir()
+    result = command(what, tmp_path / "results")
+    assert refused(*result, f"{tmp_path / 'results'}: is a folder, not a netCDF file"), result
+    assert files_under(tmp_path) == {Path("results")}
+
+
+def make_plan(target) -> list:
+    """The commands the Makefile runs for ``target``, each split into words (``make -n``: nothing runs)."""
+    if shutil.which("make") is None:
+        pytest.skip("no make here")
+    plan = subprocess.run(["make", "-n", "-C", str(ROOT), target], capture_output=True, text=True, check=True)
+    return [line.split() for line in plan.stdout.splitlines() if "dlasweep" in line]
+
+
+def test_make_sweep_writes_only_what_git_ignores():
+    if subprocess.run(["git", "-C", str(ROOT), "rev-parse"], capture_output=True).returncode:
+        pytest.skip("not a git checkout")
+    outputs = [words[words.index("-o") + 1] for words in make_plan("sweep")]
+    assert outputs == ["results/quick.nc", "results/quick"]  # the test knows which is the file, which the folder
+    written = [outputs[0], f"{outputs[0]}.parts/manifest.json", f"{outputs[0]}.parts/part-0.npz",
+               *(f"{outputs[1]}/{name}" for name in report_files())]
+    for path in written:
+        assert subprocess.run(["git", "-C", str(ROOT), "check-ignore", "-q", path]).returncode == 0, path
+    assert subprocess.run(["git", "-C", str(ROOT), "ls-files", "--error-unmatch", "results/examples/quick/report.md"],
+                          capture_output=True).returncode == 0  # the committed example
+
+
+def test_make_sweep_resumes_an_interrupted_run_and_replaces_a_finished_one(run_cli, write_spec, tmp_path,
+                                                                           dask_cluster, monkeypatch):
+    words = next(words for words in make_plan("sweep") if "sweep" in words[1:2])
+    options = [w for w in words[2:] if w.startswith("--")]  # not the spec, nor -o and its file
+    out = tmp_path / "quick.nc"
+    sweep_again = ["sweep", write_spec(), "-o", out, *options, "--scheduler", dask_cluster.scheduler_address]
+    interrupt_after_a_part(monkeypatch)
+    assert run_cli(*sweep_again)[0] == 130 and Path(f"{out}.parts").is_dir()
+    monkeypatch.undo()
+    status, _, err = run_cli(*sweep_again)
+    assert status == 0, err
+    assert not Path(f"{out}.parts").exists()
+    status, _, err = run_cli(*sweep_again)
+    assert status == 0, err
+
+
+def interrupt_after_a_part(monkeypatch) -> list:
+    """Make Ctrl-C come when a sweep would save its second part; return the keys of the clusters saved."""
+    written = []
+    real_write = sweep.Parts.write
+
+    def write(self, results):
+        if written:
+            raise KeyboardInterrupt
+        real_write(self, results)
+        written.extend(results)
+
+    monkeypatch.setattr(sweep.Parts, "write", write)
+    return written
+
+
+def test_an_interrupt_says_how_many_finished_clusters_are_kept(run_cli, write_spec, tmp_path, dask_cluster,
+                                                               monkeypatch):
+    out = tmp_path / "tiny.nc"
+    written = interrupt_after_a_part(monkeypatch)
+    status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", dask_cluster.scheduler_address)
+    assert status == 130
+    kept = sweep.Parts(Path(f"{out}.parts"))
+    assert written and kept.n_finished == len(written) == sum(kept.finished(key) for key in written)
+    clusters = "1 finished cluster" if len(written) == 1 else f"{len(written)} finished clusters"
+    assert err.strip().splitlines()[-1] == (f"dlasweep sweep: interrupted; {clusters} kept in {out}.parts, "
+                                            "continue with --resume")
+
+
+def test_an_interrupt_before_any_cluster_finished_says_nothing_is_kept(tmp_path):
+    spec = tmp_path / "big.toml"
+    spec.write_text(TINY_SPEC.replace("size = [0, 24]", "size = [0]").replace("n_particles = [20, 60, 150]",
+                                                                              "n_particles = [3000000]")
+                    .replace("seeds = 3", "seeds = 1").replace("stickiness = [1.0, 0.5]", "stickiness = 1.0"))
+    out, parts = tmp_path / "big.nc", tmp_path / "big.nc.parts"
+    # SIGINT as Ctrl-C sends it; a shell starts a background job with SIGINT ignored, which the child would inherit.
+    child = subprocess.Popen([sys.executable, "-m", "dlasweep", "sweep", str(spec), "-o", str(out)], text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        start = time.monotonic()
+        while not parts.exists():  # the sweep has started: its one cluster takes a minute
+            assert child.poll() is None and time.monotonic() - start < 300, child.stderr.read()
+            time.sleep(0.05)
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=30)
+    finally:
+        child.kill()
+    assert child.returncode == 130, err
+    assert err.strip().splitlines() == ["dlasweep sweep: interrupted; no cluster had finished, nothing is kept"]
+    assert files_under(tmp_path) == {Path("big.toml")}

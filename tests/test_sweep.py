@@ -1,10 +1,13 @@
 """Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
 
 import contextlib
+import functools
 import gc
 import errno
+import io
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -21,7 +24,7 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, files_under, science
-from dlasweep import measure, store, sweep
+from dlasweep import measure, progress, store, sweep
 from dlasweep.spec import parse_spec
 
 
@@ -597,3 +600,35 @@ def test_a_collector_switched_off_stays_off_during_a_sweep():
         assert gc.get_threshold()[0] == 0
     finally:
         gc.set_threshold(*thresholds)
+
+
+def progress_lines(text) -> list:
+    """The finished counts the progress lines in ``text`` give."""
+    return [int(n) for n in re.findall(r"^\w+ \d\d:\d\d:\d\d: (\d+)/\d+ clusters finished", text, re.M)]
+
+
+@pytest.mark.parametrize("seconds_each, shown", [
+    (0.5, [30, 40, 50, 60, 70, 80, 90, 100]),  # a line each 10% (10 clusters, 5 s)
+    (0.02, [70]),                              # 10% in 0.2 s: at most a line a second
+    (11.0, list(range(21, 31))),               # a line after each cluster: none for 10 s
+])
+def test_progress_lines_each_tenth_or_ten_seconds(seconds_each, shown, monkeypatch):
+    clock = [0.0]
+    monkeypatch.setattr(progress.time, "monotonic", lambda: clock[0])
+    log = io.StringIO()
+    with progress.Lines(100, initial=20, desc="quick", file=log) as lines:
+        for _ in range(10 if seconds_each > 10 else 80):
+            clock[0] += seconds_each
+            lines.update(1)
+    assert progress_lines(log.getvalue()) == shown
+    assert all(line.endswith(" left") for line in log.getvalue().splitlines() if "100/100" not in line)
+
+
+@pytest.mark.parametrize("on_terminal", [False, True])
+def test_a_sweep_off_a_terminal_prints_progress_lines(on_terminal, tmp_path, dask_client, monkeypatch, capsys):
+    monkeypatch.setattr(sweep, "Lines", functools.partial(progress.Lines, gap=0))  # the tiny sweep takes a second
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: on_terminal)
+    batches_of(monkeypatch, 3)
+    dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "tiny.nc").close()
+    shown = progress_lines(capsys.readouterr().err)
+    assert shown == ([] if on_terminal else [3, 6, 9, 12])
