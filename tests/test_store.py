@@ -1,6 +1,5 @@
 """The netCDF layer: one round trip of the dataset layout (README, "The dataset"), CF compliance, atomic writes, bad files."""
 
-import shutil
 import subprocess
 
 import netCDF4
@@ -115,12 +114,8 @@ def test_readable_without_xarray(saved):
         assert list(nc["jumps"][:]) == [1, 0]
 
 
-def cf_errors(path, tables):
+def cf_errors(path, tables, cfchecks):
     """ERROR and FATAL messages of cfchecker on ``path``, as ``variable: message`` lines."""
-    try:
-        from cfchecker import cfchecks
-    except (ImportError, OSError):  # cfunits raises OSError without the udunits2 C library
-        pytest.skip("cfchecker (with the udunits2 library) not installed")
     checker = cfchecks.CFChecker(cfStandardNamesXML=tables["standard_names"], cfAreaTypesXML=tables["area_types"],
                                  cfRegionNamesXML=tables["regions"], version=cfchecks.CFVersion(), silent=True)
     results = checker.checker(str(path))
@@ -142,7 +137,7 @@ def cf_tables(tmp_path):
     return {name: str(tmp_path / f"{name}.xml") for name in tables}
 
 
-def test_cf_checker_finds_no_errors(saved, cf_tables, tmp_path):
+def test_cf_checker_finds_no_errors(saved, cf_tables, cfchecks, tmp_path):
     ds, sweep = saved
     target = tmp_path / "target.nc"
     half_width = ds["box_count"].isel(n_particles=-1, seed=0, scale=0, drop=True).astype(float) / 100
@@ -156,13 +151,12 @@ def test_cf_checker_finds_no_errors(saved, cf_tables, tmp_path):
         ds, clusters = synthetic_parts(SPEC.replace("root_seed = 99", f"root_seed = 99\nstore_clusters = {value}"))
         store.save(ds, files[-1], clusters)
     for path in files:
-        assert cf_errors(path, cf_tables) == [], path.name
+        assert cf_errors(path, cf_tables, cfchecks) == [], path.name
 
 
-@pytest.mark.skipif(shutil.which("ncdump") is None, reason="ncdump (netcdf-bin) not installed")
-def test_ncdump_reads_the_header(saved):
+def test_ncdump_reads_the_header(saved, ncdump):
     _, path = saved
-    header = subprocess.run(["ncdump", "-h", str(path)], capture_output=True, text=True, check=True).stdout
+    header = subprocess.run([ncdump, "-h", str(path)], capture_output=True, text=True, check=True).stdout
     assert 'cluster_particles:sample_dimension = "particle"' in header
 
 
