@@ -21,11 +21,13 @@ CF (checked with cfchecker, CF-1.8; tests/test_store.py):
   vertical line. CF lists a time coordinate for trajectories; here a
   particle's place in its cluster's block is its attachment order, and no
   variable repeats it (8 bytes a particle).
-* ``cluster_id(cluster)`` (the position along ``cluster``) has ``cf_role =
-  "trajectory_id"``, the one instance variable a trajectory file has;
-  ``cluster_particles`` is the count variable (32-bit ``int``, the integer
-  type the checker asks of it; a cluster holds at most
-  ``spec.MAX_PARTICLES`` particles).
+* ``cluster(cluster)``, the coordinate variable of the instance dimension
+  (0, 1, ...: the cluster's position in the file), has ``cf_role =
+  "trajectory_id"`` as in CF's examples: the one instance variable of a
+  trajectory file (a ``cluster_<name>`` is one of the clusters'
+  parameters). ``cluster_particles`` is the count variable (32-bit
+  ``int``, the integer type the checker asks of it; a cluster holds at
+  most ``spec.MAX_PARTICLES`` particles).
 * ``x``, ``y`` (``z``) are the particles' space coordinates, auxiliary
   coordinates of ``diffusion_time`` (its ``coordinates`` attribute), with
   ``axis = "X"``, ``"Y"``, ``"Z"``: cf_xarray's ``ds.cf["X"]`` finds them.
@@ -136,8 +138,8 @@ SCHEMA = {
     # the clusters: a CF contiguous ragged array of trajectories (see CF in the module docstring)
     "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster",
                                   {"sample_dimension": "particle"}),
-    "cluster_id": Variable(("cluster",), np.int32, "1", "position of the cluster along `cluster`",
-                           {"cf_role": "trajectory_id"}),
+    "cluster": Variable(("cluster",), np.int32, "1", "number of the cluster: its position in the file",
+                        {"cf_role": "trajectory_id"}),
     "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
     **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
                    {"axis": a.upper()}) for a in AXES},
@@ -229,7 +231,7 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
         # of the axis's type, also when no cluster is stored
         coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks], coords[name][1].dtype))
     coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], SCHEMA["cluster_seed"].dtype))
-    coords["cluster_id"] = ("cluster", np.arange(len(tasks), dtype=SCHEMA["cluster_id"].dtype))
+    coords["cluster"] = ("cluster", np.arange(len(tasks), dtype=SCHEMA["cluster"].dtype))
 
     data = {name: (dims(name, tuple(spec.axes)), science[name]) for name in (*SCIENCE, "wall_time")}
     data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
@@ -282,7 +284,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     points = cluster.points
     coords = {name: ((), value) for name, value in cluster.params.items()}
     coords["cluster_seed"] = ("cluster", np.asarray([seed], SCHEMA["cluster_seed"].dtype))
-    coords["cluster_id"] = ("cluster", np.zeros(1, SCHEMA["cluster_id"].dtype))
+    coords["cluster"] = ("cluster", np.zeros(1, SCHEMA["cluster"].dtype))
     data = {
         "cluster_particles": ("cluster", np.asarray([len(points)])),
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
@@ -664,11 +666,11 @@ def attributes(name, dtype=None, schema=None) -> dict:
 
 
 def _booleans(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` with its booleans (int8 flags ``_BOOLEAN`` in the file) as bool again."""
-    flags = {name: var.astype(bool) for name, var in ds.variables.items()
-             if var.attrs.get("flag_meanings") == _BOOLEAN and var.dtype != bool}
-    return ds.assign_coords({k: v for k, v in flags.items() if k in ds.coords}).assign(
-        {k: v for k, v in flags.items() if k not in ds.coords})
+    """Turn ``ds``'s booleans (int8 flags ``_BOOLEAN`` in the file) back into bool, in place: it still closes its file."""
+    for name, var in list(ds.variables.items()):
+        if var.attrs.get("flag_meanings") == _BOOLEAN and var.dtype != bool:
+            (ds.coords if name in ds.coords else ds)[name] = var.astype(bool)
+    return ds
 
 
 _COMMAND = contextvars.ContextVar("dlasweep_command", default=None)

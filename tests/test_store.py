@@ -1,5 +1,6 @@
 """The netCDF layer: one round trip of the dataset layout (README, "The dataset"), CF compliance, atomic writes, bad files."""
 
+import os
 import re
 import subprocess
 import sys
@@ -212,9 +213,8 @@ def test_clusters_are_a_cf_ragged_array_of_trajectories(saved, tmp_path):
     with netCDF4.Dataset(path) as nc:
         assert nc.featureType == "trajectory"
         roles = {name: var.cf_role for name, var in nc.variables.items() if "cf_role" in var.ncattrs()}
-        assert roles == {"cluster_id": "trajectory_id"} and nc["cluster_id"].dimensions == ("cluster",)
-        np.testing.assert_array_equal(nc["cluster_id"][:], np.arange(nc.dimensions["cluster"].size))
-        assert "cluster_id" in nc["cluster_particles"].coordinates.split()  # an auxiliary coordinate of the clusters
+        assert roles == {"cluster": "trajectory_id"} and nc["cluster"].dimensions == ("cluster",)
+        np.testing.assert_array_equal(nc["cluster"][:], np.arange(nc.dimensions["cluster"].size))
         assert nc["diffusion_time"].coordinates == "x y" and (nc["x"].axis, nc["y"].axis) == ("X", "Y")
         # No attribute but CF's: xarray's own marker of booleans ("dtype") is gone.
         assert [name for name, var in nc.variables.items() if "dtype" in var.ncattrs()] == []
@@ -228,7 +228,7 @@ def test_cf_xarray_finds_the_axes_and_the_clusters(tmp_path, dim):
     with xr.open_dataset(path) as ds:
         assert ds.cf.axes == {a.upper(): [a] for a in store.AXES[:dim]}
         assert ds.cf["X"].name == "x" and ds.cf["Y"].name == "y"
-        assert ds.cf.cf_roles == {"trajectory_id": ["cluster_id"]}
+        assert ds.cf.cf_roles == {"trajectory_id": ["cluster"]}
 
 
 def test_history_names_the_command_line_and_the_version(tmp_path, saved):
@@ -381,3 +381,14 @@ def test_lattice_sites_alone_are_written_unshuffled(tmp_path):
     with netCDF4.Dataset(tmp_path / "lattice.nc") as nc:
         assert {name: (nc[name].dtype, nc[name].filters()["shuffle"]) for name in ("x", "y", "diffusion_time")} == {
             "x": (np.int32, False), "y": (np.int32, False), "diffusion_time": (np.int64, True)}
+
+
+def test_an_opened_dataset_closes_its_file(saved):
+    _, path = saved
+
+    def open_files():
+        return {os.path.realpath(f"/proc/self/fd/{fd}") for fd in os.listdir("/proc/self/fd")}
+
+    with store.open_sweep(path) as ds:
+        assert ds["jumps"].dtype == bool and str(path) in open_files()
+    assert str(path) not in open_files()
