@@ -127,7 +127,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
         if exact.sizes["run"] >= 2:
             slope = np.polyfit(np.log(exact.n.values.astype(float)), np.log(exact.seconds.values), 1)[0]
-            ds.attrs[f"cost_exponent_{name}"] = float(slope)
+            ds.attrs[exponent_attribute(name)] = float(slope)
             echo(f"{name}: time grows as N^{slope:.2f}")
     for n in naive_counts:
         sel = ds.where(ds.n == n, drop=True)
@@ -191,19 +191,23 @@ def target_table(ds: xr.Dataset) -> list[str]:
     return lines
 
 
+def exponent_attribute(model: str) -> str:
+    """The global attribute holding ``model``'s cost exponent: ``cost_exponent_lattice_2d`` (CF: no hyphens)."""
+    return f"cost_exponent_{model.replace('-', '_')}"
+
+
 def _to_dataset(rows) -> xr.Dataset:
     """The measurements as a Dataset on ``run``, laid out and described by ``store.BENCH_SCHEMA``."""
-    from .store import BENCH_SCHEMA, attributes
+    from .store import BENCH_SCHEMA, describe, provenance
 
     keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
-    columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype),
-                      attributes(name, schema=BENCH_SCHEMA))
+    columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype))
                for name, var in BENCH_SCHEMA.items()}
     coords = ("model", "method", "n")
     ds = xr.Dataset({name: column for name, column in columns.items() if name not in coords},
-                    coords={name: columns[name] for name in coords})
-    ds.attrs["title"] = "dlasweep kernel benchmark"
-    return ds
+                    coords={name: columns[name] for name in coords},
+                    attrs={"title": "dlasweep kernel benchmark", "history": provenance("dlasweep.bench.run_bench")})
+    return describe(ds, BENCH_SCHEMA)
 
 
 REPORT_SPEC = """\

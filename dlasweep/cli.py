@@ -26,6 +26,7 @@ from . import params as _params
 from . import slurm, store
 from ._version import __version__
 from .analysis import summarise
+from .bench import exponent_attribute
 from .fit import fit_mass_radius
 from .grow import compiled, grow
 from .measure import radius_of_gyration
@@ -76,7 +77,8 @@ def main(argv=None) -> int:
             _say(parser.format_help().rstrip())
             return 2
         command = f"dlasweep {args.command}"
-        return args.handler(args)
+        with store.command_line(["dlasweep", *argv]):  # the files' history
+            return args.handler(args)
     except SystemExit as done:  # --help, --version
         return int(done.code or 0)
     except BrokenPipeError:  # the reader left (``dlasweep info f.nc | head``): end quietly, as SIGPIPE would
@@ -382,13 +384,14 @@ def _report(args) -> int:
 def _info(args) -> int:
     """Print what a dataset holds, in the project's words (``ncdump -h`` gives the raw header)."""
     _check_dataset(args.dataset)
-    ds = store.open_sweep(args.dataset)
+    ds = store.open_dataset(args.dataset)
     try:
-        lines = _sweep_info(ds) if "box_count" in ds else _cluster_info(ds)
+        lines = _bench_info(ds) if "run" in ds.dims else _sweep_info(ds) if "box_count" in ds else _cluster_info(ds)
     finally:
         ds.close()
+    history = ds.attrs["history"].replace("\n", "\n  ")  # one line per step
     print("\n".join([f"{args.dataset}: {ds.attrs['title']}", f"  {ds.attrs['source']}, "
-                     f"{ds.attrs['Conventions']}; {ds.attrs['history']}", *lines]))
+                     f"{ds.attrs['Conventions']}; {history}", *lines]))
     return 0
 
 
@@ -437,6 +440,23 @@ def _cluster_info(ds) -> list:
             f"particles: {len(points)}, status {store.STATUS_FLAGS[int(ds['status'][0])]}",
             f"D of this cluster (mass-radius, 95% CI): {_number(fit.D)} "
             f"[{_number(fit.ci_lo)}, {_number(fit.ci_hi)}], {window}"]
+
+
+def _bench_info(ds) -> list:
+    """What ``info`` says of a benchmark: its runs, each model's largest exact run and cost exponent."""
+    model, method, n = ds["model"].values.astype(str), ds["method"].values.astype(str), ds["n"].values
+    lines = [f"runs: {ds.sizes['run']} (" + ", ".join(f"{k} {int((method == k).sum())}"
+                                                      for k in dict.fromkeys(method)) + ")"]
+    rows = []
+    for name in dict.fromkeys(model):
+        exact = np.flatnonzero((model == name) & (method == "exact"))
+        top = exact[np.argmax(n[exact])]
+        exponent = ds.attrs.get(exponent_attribute(name))
+        rows.append([name, _values(np.sort(n[exact])), f"{n[top]}", f"{float(ds['seconds'][top]):.3g}",
+                     f"{float(ds['peak_memory'][top]):.0f}", "" if exponent is None else f"{exponent:.2f}"])
+    ratios = {k.removeprefix("naive_over_exact_"): v for k, v in ds.attrs.items() if k.startswith("naive_over_exact_")}
+    return [*lines, *_table(["model", "N (exact)", "largest", "seconds", "peak MiB", "time ~ N^"], rows),
+            "naive walk / exact jumps, time: " + (", ".join(f"N={k} {v:.1f}x" for k, v in ratios.items()) or "none")]
 
 
 def _table(header, rows) -> list:

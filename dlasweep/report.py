@@ -30,6 +30,7 @@ from .analysis import (
     resolved,
     visible_scales,
 )
+from .bench import exponent_attribute
 from .fit import MIN_DECADES, START_FRACTION
 from .pictures import draw_points
 
@@ -702,7 +703,7 @@ def plot_bench(ds, outdir) -> Path:
     ds : xarray.Dataset
         As from ``dlasweep.bench.run_bench``: dimension ``run``, coordinates
         ``model``, ``method`` (``exact`` or ``naive``) and ``n``, variable
-        ``seconds``, attributes ``cost_exponent_<model>``.
+        ``seconds``, attributes ``bench.exponent_attribute(<model>)``.
     outdir : str or Path
         Created when missing.
 
@@ -718,7 +719,7 @@ def plot_bench(ds, outdir) -> Path:
     n, seconds = ds["n"].values.astype(float), ds["seconds"].values.astype(float)
     fig, (ax,) = _figure(1, 6.5, 4.5)
     for c, name in enumerate(dict.fromkeys(model)):
-        exponent = ds.attrs.get(f"cost_exponent_{name}")
+        exponent = ds.attrs.get(exponent_attribute(name))
         fitted = f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else ""
         for kind, style, label in (
             ("exact", dict(marker="o", ls="-"), name + fitted),

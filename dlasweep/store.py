@@ -8,18 +8,36 @@ parameters are the ``cluster_<name>`` coordinates on ``cluster``. Every
 model parameter that is not swept is a scalar coordinate, so ``ds["dim"]``
 or ``ds["model"]`` works whether or not it is a sweep axis.
 
-CF (checked with cfchecker, CF-1.8):
+CF (checked with cfchecker, CF-1.8; tests/test_store.py):
 
-* ``featureType = "point"``. CF requires a featureType once a count
-  variable (``sample_dimension``) makes the file a ragged array, and offers
-  only point, timeSeries, trajectory, profile and their combinations. A
-  cluster has no time axis, path or vertical profile: its particles are
-  points in space, located by ``x``, ``y`` (``z``), which is what "point"
-  describes. The count variable then groups those points by cluster; CF
-  defines its contiguous ragged layout for the other feature types, and
-  readers that know it (``cluster_points`` here) apply it unchanged.
-* The count variable is 32-bit ``int``, the integer type the CF-1.8 check
-  asks of it (a cluster holds at most ``spec.MAX_PARTICLES`` particles).
+* A discrete sampling geometry, one cluster per instance: ``featureType =
+  "trajectory"``. CF-1.8 (9.1, 9.3.3) gives the contiguous ragged array, a
+  count variable with ``sample_dimension``, to timeSeries, trajectory,
+  profile and their combinations, not to point, whose every instance is
+  one point: a point file's count variable groups nothing CF names. Of
+  those, a cluster is a trajectory, "a series of data points along a path
+  through space" in order: its particles in the order they attached, the
+  growth's clock. A time series stays at one place and a profile on one
+  vertical line. CF lists a time coordinate for trajectories; here a
+  particle's place in its cluster's block is its attachment order, and no
+  variable repeats it (8 bytes a particle).
+* ``cluster(cluster)``, the coordinate variable of the instance dimension
+  (0, 1, ...: the cluster's position in the file), has ``cf_role =
+  "trajectory_id"`` as in CF's examples: the one instance variable of a
+  trajectory file (a ``cluster_<name>`` is one of the clusters'
+  parameters). ``cluster_particles`` is the count variable (32-bit
+  ``int``, the integer type the checker asks of it; a cluster holds at
+  most ``spec.MAX_PARTICLES`` particles).
+* ``x``, ``y`` (``z``) are the particles' space coordinates, auxiliary
+  coordinates of ``diffusion_time`` (its ``coordinates`` attribute), with
+  ``axis = "X"``, ``"Y"``, ``"Z"``: cf_xarray's ``ds.cf["X"]`` finds them.
+  No ``standard_name``: CF's names for positions (``projection_x_coordinate``
+  and the like) are lengths in metres on a map; these are counted in
+  lattice spacings or particle diameters.
+* cfchecker 4.1 notes "attribute sample_dimension is being used in a
+  non-standard way" on every count variable of a CF-1.7 or later file, CF's
+  own examples included (its table of attributes names no kind of variable
+  for it from CF-1.7 on): that note is the checker's, not this layout's.
 * Strings (``model``, ``seed_shape``, ``launch`` and their ``cluster_``
   coordinates) are char arrays with a string-length dimension
   (``string<N>``) and ``_Encoding = "utf-8"``: the CF-1.8 check rejects
@@ -28,16 +46,23 @@ CF (checked with cfchecker, CF-1.8):
   ``long_name`` and no ``units``. A swept string parameter stays a
   variable named after its dimension, so that xarray selects by it; the
   checker warns there, as a CF coordinate variable is numeric.
-* Booleans (``jumps``) are int8 0/1 with ``flag_values``/``flag_meanings``
-  plus xarray's ``dtype = "bool"`` marker, so they come back as bool
-  through xarray and read as 0/1 anywhere else.
+* Booleans (``jumps``) are int8 0/1 with ``flag_values`` and
+  ``flag_meanings = "false true"``, nothing else: ``open_sweep`` turns them
+  back into bool (xarray would want its own ``dtype = "bool"`` attribute,
+  which is no CF attribute). They are model parameters, so coordinates,
+  and the checker notes flags there (CF-1.8 names them for data variables).
+* ``history``: when the file was made, by which command line (the CLI's,
+  ``command_line``) or Python function, and the dlasweep version.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import datetime
 import os
-from dataclasses import dataclass
+import shlex
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import netCDF4
@@ -71,12 +96,15 @@ class Variable:
     units : str or None
         None for strings, which have no units.
     long_name : str
+    cf : dict
+        Its other CF attributes (``axis``, ``cf_role``, ``sample_dimension``).
     """
 
     dims: tuple
     dtype: object
     units: str | None
     long_name: str
+    cf: dict = field(default_factory=dict)
 
     @property
     def missing(self):
@@ -108,10 +136,14 @@ SCHEMA = {
                      "replicate number (with root_seed and the grid indices it names the random stream)"),
     "scale": Variable(("scale",), np.float64, "1", f"box side for box counting, in {_LENGTH}"),
     "history": Variable(("history",), np.int64, "1", "particle count at which the growth history is recorded"),
-    # the clusters: a CF contiguous ragged array
-    "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster"),
+    # the clusters: a CF contiguous ragged array of trajectories (see CF in the module docstring)
+    "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster",
+                                  {"sample_dimension": "particle"}),
+    "cluster": Variable(("cluster",), np.int32, "1", "number of the cluster: its position in the file",
+                        {"cf_role": "trajectory_id"}),
     "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
-    **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}") for a in AXES},
+    **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
+                   {"axis": a.upper()}) for a in AXES},
     "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
     # Every model parameter: a sweep axis, else a scalar; strings have no units.
     **{name: Variable((name,), p.kind, p.units, p.meaning) for name, p in _params.PARAMETERS.items()},
@@ -125,12 +157,16 @@ SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "a
            "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
+MIB = "2^20 byte"
+"""The units of memory sizes (MiB, which udunits does not know)."""
+
 BENCH_SCHEMA = {
     "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
     "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
     "walk_steps": Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
-    "peak_memory": Variable(("run",), np.float64, "MiB", "peak resident memory of the process"),
-    "added_memory": Variable(("run",), np.float64, "MiB", "peak resident memory added by growing the cluster"),
+    # MiB, in words udunits reads
+    "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
+    "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
     "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
@@ -193,14 +229,16 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     coords.update((name, ((), value)) for name, value in fixed.items())
     tasks = [t for t in spec.tasks() if spec.stores(t)]
     for name in (*spec.axes, "size"):
-        coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks]))
+        # of the axis's type, also when no cluster is stored
+        coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks], coords[name][1].dtype))
     coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], SCHEMA["cluster_seed"].dtype))
+    coords["cluster"] = ("cluster", np.arange(len(tasks), dtype=SCHEMA["cluster"].dtype))
 
     data = {name: (dims(name, tuple(spec.axes)), science[name]) for name in (*SCIENCE, "wall_time")}
     data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
     attrs = {
         "title": f"dlasweep parameter sweep '{spec.name}': diffusion-limited aggregation clusters",
-        "history": f"{_now()} created by dlasweep {__version__} (run_sweep)",
+        "history": provenance("dlasweep.run_sweep"),
         "spec": spec.text,
         "root_seed": spec.root_seed,
     }
@@ -246,7 +284,8 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     """
     points = cluster.points
     coords = {name: ((), value) for name, value in cluster.params.items()}
-    coords["cluster_seed"] = ("cluster", np.asarray([seed], np.int64))
+    coords["cluster_seed"] = ("cluster", np.asarray([seed], SCHEMA["cluster_seed"].dtype))
+    coords["cluster"] = ("cluster", np.zeros(1, SCHEMA["cluster"].dtype))
     data = {
         "cluster_particles": ("cluster", np.asarray([len(points)])),
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
@@ -255,7 +294,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     }
     attrs = {
         "title": "dlasweep: one diffusion-limited aggregation cluster",
-        "history": f"{_now()} created by dlasweep {__version__} (grow)",
+        "history": provenance("dlasweep.store.cluster_dataset"),
         "seed": int(seed),
     }
     return _describe(xr.Dataset(data, coords=coords, attrs=attrs))
@@ -407,6 +446,10 @@ class ParticleWriter:
                 var.setncatts(attributes(name, dtype))
                 self._variables[name] = var
                 self._buffer[name] = np.empty(PARTICLE_CHUNK, dtype)
+            axes = [name for name in columns if name in AXES]
+            for name, var in self._variables.items():
+                if name not in axes:  # what xarray writes for the coordinates x, y (z) of a variable
+                    var.setncattr("coordinates", " ".join(axes))
         finally:
             netCDF4.set_chunk_cache(*cache)
 
@@ -447,6 +490,8 @@ class ParticleWriter:
                 enc["_FillValue"] = None
             if var.dtype.kind in "OU":
                 enc["dtype"] = "S1"  # a char array: see CF in the module docstring
+            elif var.dtype == bool:
+                enc["dtype"] = "i1"  # flags, without xarray's own dtype attribute: see CF
             encoding[name] = enc
         # unlimited_dims: not the ``particle`` of a dataset opened from a file, which the file has
         rest.to_netcdf(self.tmp, mode="a", engine="netcdf4", format="NETCDF4", encoding=encoding, unlimited_dims=[])
@@ -463,7 +508,7 @@ def open_sweep(path, chunks=None) -> xr.Dataset:
     """Open a dataset written by dlasweep (a sweep or one cluster).
 
     Everything but the per-particle arrays is read at once, so a damaged
-    file fails here rather than later.
+    file fails here rather than later. Booleans come back as bool.
 
     Parameters
     ----------
@@ -479,18 +524,7 @@ def open_sweep(path, chunks=None) -> xr.Dataset:
     StoreError
         When the file is missing, not netCDF, truncated, or not from dlasweep.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise StoreError(f"{path}: no such file")
-    try:
-        ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks)
-    except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...
-        raise StoreError(f"{path}: not a readable netCDF file ({one_line(err)})") from None
-    missing = [v for v in ("cluster_particles", "x", "y", "diffusion_time") if v not in ds.variables]
-    if not str(ds.attrs.get("source", "")).startswith("dlasweep") or missing:
-        ds.close()
-        what = f"missing {', '.join(missing)}" if missing else "no 'source = dlasweep' attribute"
-        raise StoreError(f"{path}: not a dlasweep dataset ({what})")
+    ds = _open(path, ("cluster_particles", "x", "y", "diffusion_time"), chunks)
     try:
         for var in ds.variables.values():
             if "particle" not in var.dims:
@@ -498,6 +532,41 @@ def open_sweep(path, chunks=None) -> xr.Dataset:
     except Exception as err:
         ds.close()
         raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
+    return _booleans(ds)
+
+
+def open_bench(path) -> xr.Dataset:
+    """Open, and read, a file ``dlasweep bench`` wrote (``BENCH_SCHEMA``); ``StoreError`` as ``open_sweep``."""
+    ds = _open(path, tuple(BENCH_SCHEMA))
+    try:
+        return ds.load()
+    except Exception as err:
+        ds.close()
+        raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
+
+
+def open_dataset(path) -> xr.Dataset:
+    """Open any file dlasweep wrote: a benchmark (dimension ``run``: ``open_bench``), else ``open_sweep``."""
+    with _open(path, ()) as ds:
+        bench = "run" in ds.dims
+    return open_bench(path) if bench else open_sweep(path)
+
+
+def _open(path, required, chunks=None) -> xr.Dataset:
+    """A netCDF file from dlasweep with the variables ``required``, opened lazily (``chunks`` as
+    ``open_sweep``); else ``StoreError``."""
+    path = Path(path)
+    if not path.is_file():
+        raise StoreError(f"{path}: no such file")
+    try:
+        ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks)
+    except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...
+        raise StoreError(f"{path}: not a readable netCDF file ({one_line(err)})") from None
+    missing = [v for v in required if v not in ds.variables]
+    if not str(ds.attrs.get("source", "")).startswith("dlasweep") or missing:
+        ds.close()
+        what = f"missing {', '.join(missing)}" if missing else "no 'source = dlasweep' attribute"
+        raise StoreError(f"{path}: not a dlasweep dataset ({what})")
     return ds
 
 
@@ -604,10 +673,13 @@ def _find_cluster(ds, where) -> int:
     return int(found[0])
 
 
-def _coordinate(values) -> np.ndarray:
-    """Values as an array whose type survives netCDF (strings as objects)."""
-    array = np.asarray(values)
-    return array.astype(object) if array.dtype.kind == "U" else array
+def _coordinate(values, dtype=None) -> np.ndarray:
+    """Values as an array whose type survives netCDF: strings as objects, none as str (xarray
+    writes an empty object array as doubles)."""
+    array = np.asarray(values, dtype)
+    if array.dtype.kind not in "OU":
+        return array
+    return array.astype(object) if array.size else array.astype("U1")
 
 
 def _positions(column) -> np.ndarray:
@@ -615,18 +687,36 @@ def _positions(column) -> np.ndarray:
 
 
 def _describe(ds: xr.Dataset) -> xr.Dataset:
-    """Give every variable its long_name and units, flags their meanings, the file its globals."""
+    """``describe`` a sweep or a cluster, the positions as coordinates: a CF trajectory ragged array."""
     ds["cluster_particles"] = ds["cluster_particles"].astype(np.int32)
+    return describe(ds.set_coords([a for a in AXES if a in ds.data_vars]), featureType="trajectory")
+
+
+def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
+    """Give every variable its attributes (``attributes``), the file the global attributes of all dlasweep files.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Changed in place and returned.
+    schema : dict, optional
+        Its variables' table (default ``SCHEMA``; ``BENCH_SCHEMA`` for ``dlasweep bench``).
+    **globals_
+        More global attributes (``featureType``), put first with ``Conventions`` and ``source``.
+    """
     for name, var in ds.variables.items():
-        var.attrs.update(attributes(name, var.dtype))
-    ds["cluster_particles"].attrs["sample_dimension"] = "particle"
-    ds.attrs = {"Conventions": "CF-1.8", "featureType": "point", "source": f"dlasweep {__version__}",
-                **ds.attrs}
+        var.attrs.update(attributes(name, var.dtype, schema))
+    first = {"Conventions": "CF-1.8", **globals_, "source": f"dlasweep {__version__}"}
+    ds.attrs = {**first, **{k: v for k, v in ds.attrs.items() if k not in first}}
     return ds
 
 
+_BOOLEAN = "false true"
+"""``flag_meanings`` of a boolean."""
+
+
 def attributes(name, dtype=None, schema=None) -> dict:
-    """A variable's ``long_name`` and ``units`` (none for strings), and the meanings of its flags.
+    """A variable's ``long_name`` and ``units`` (none for strings), its other CF attributes, the meanings of its flags.
 
     From its row of ``schema`` (default ``SCHEMA``); a ``cluster_<name>``
     coordinate takes ``<name>``'s, as "the cluster's <name>: ...".
@@ -635,12 +725,42 @@ def attributes(name, dtype=None, schema=None) -> dict:
     key = name if name in schema else name.removeprefix("cluster_")
     var = schema[key]
     long_name = var.long_name if key == name else f"the cluster's {key}: {var.long_name}"
-    attrs = {"long_name": long_name, **({"units": var.units} if var.units else {})}
+    attrs = {"long_name": long_name, **({"units": var.units} if var.units else {}), **var.cf}
     if name == "status":
         attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
     elif dtype == bool:
-        attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings="false true")
+        attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings=_BOOLEAN)
     return attrs
+
+
+def _booleans(ds: xr.Dataset) -> xr.Dataset:
+    """Turn ``ds``'s booleans (int8 flags ``_BOOLEAN`` in the file) back into bool, in place: it still closes its file."""
+    for name, var in list(ds.variables.items()):
+        if var.attrs.get("flag_meanings") == _BOOLEAN and var.dtype != bool:
+            (ds.coords if name in ds.coords else ds)[name] = var.astype(bool)
+    return ds
+
+
+_COMMAND = contextvars.ContextVar("dlasweep_command", default=None)
+
+
+@contextlib.contextmanager
+def command_line(argv):
+    """Within, the files written record the command line ``argv`` (a list) in their ``history``.
+
+    The command line runs each command so; a Python caller's files name
+    the function that made them instead.
+    """
+    token = _COMMAND.set(shlex.join(argv))
+    try:
+        yield
+    finally:
+        _COMMAND.reset(token)
+
+
+def provenance(function) -> str:
+    """A file's ``history``: now, the command line (``command_line``) or else the Python ``function``, the version."""
+    return f"{_now()}: {_COMMAND.get() or function} (dlasweep {__version__})"
 
 
 def _now() -> str:

@@ -1,8 +1,12 @@
-"""Shared fixtures: small specs, an in-process dask cluster, a CLI runner."""
+"""Shared fixtures: small specs, an in-process dask cluster, a CLI runner, the CF tools."""
 
 from __future__ import annotations
 
+import ctypes.util
 import os
+import shutil
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -101,3 +105,46 @@ def replicate_1_fails(monkeypatch):
 
     monkeypatch.setattr(sweep, "grow", grow)
     monkeypatch.setattr(sweep, "grow_many", grow_many)
+
+
+_APT_UPDATED = []
+
+
+def apt_install(packages, present, what):
+    """Install Debian ``packages`` with apt (as root) unless ``present()``; skip the test, in one line,
+    where that cannot be done. ``apt-get update`` runs once per session; another apt holding the
+    lock is waited for."""
+    if present():
+        return
+    if not sys.platform.startswith("linux") or shutil.which("apt-get") is None:
+        pytest.skip(f"{what} missing and no apt-get to install {' '.join(packages)}")
+    if os.geteuid() != 0:
+        pytest.skip(f"{what} missing; installing {' '.join(packages)} with apt needs root")
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    lock = ["-o", "DPkg::Lock::Timeout=600"]
+    commands = [["apt-get", *lock, "update", "-q"]] if not _APT_UPDATED else []
+    for command in [*commands, ["apt-get", *lock, "install", "-y", "-q", "--no-install-recommends", *packages]]:
+        done = subprocess.run(command, check=False, env=env, capture_output=True, text=True)
+        if done.returncode:
+            # A mirror outage must not block the rest of the suite; the reason is shown.
+            lines = [line.strip() for line in (done.stderr or done.stdout).splitlines() if line.strip()]
+            pytest.skip(f"{what} missing: {' '.join(command)} failed: {lines[-1] if lines else 'no output'}")
+        _APT_UPDATED.append(True)
+    if not present():
+        pytest.skip(f"{what} still missing after installing {' '.join(packages)}")
+
+
+@pytest.fixture(scope="session")
+def cfchecks():
+    """cfchecker's ``cfchecks`` module, with the udunits2 C library it loads (Debian libudunits2-0)."""
+    apt_install(["libudunits2-0"], lambda: ctypes.util.find_library("udunits2") is not None, "the udunits2 library")
+    from cfchecker import cfchecks
+
+    return cfchecks
+
+
+@pytest.fixture(scope="session")
+def ncdump():
+    """The path of ``ncdump`` (Debian netcdf-bin)."""
+    apt_install(["netcdf-bin"], lambda: shutil.which("ncdump") is not None, "ncdump")
+    return shutil.which("ncdump")

@@ -142,7 +142,7 @@ def check_design(ds, spec_text):
         assert name in ds.coords and ds[name].dims == ("cluster",)
     for name, var in ds.variables.items():
         assert var.attrs.get("long_name") and ("units" in var.attrs) == (var.dtype.kind not in "OU"), name
-    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["featureType"] == "point"
+    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["featureType"] == "trajectory"
     assert ds.attrs["source"] == f"dlasweep {dla.__version__}"
     assert ds.attrs["title"] and ds.attrs["history"]
     assert ds.attrs["spec"] == spec_text and ds.attrs["root_seed"] == 12345
@@ -163,7 +163,7 @@ def tiny_sweep(tmp_path_factory, dask_cluster):
     return status, out.getvalue(), err.getvalue(), folder
 
 
-def test_sweep_end_to_end_on_a_running_scheduler(tiny_sweep):
+def test_sweep_end_to_end_on_a_running_scheduler(tiny_sweep, ncdump):
     status, stdout, err, folder = tiny_sweep
     assert status == 0, err
     assert "12 clusters" in stdout
@@ -173,8 +173,7 @@ def test_sweep_end_to_end_on_a_running_scheduler(tiny_sweep):
         check_design(ds, TINY_SPEC)
     with netCDF4.Dataset(out) as nc:
         assert nc["cluster_particles"].sample_dimension == "particle"
-    if shutil.which("ncdump"):
-        subprocess.run(["ncdump", "-h", str(out)], check=True, capture_output=True)
+    subprocess.run([ncdump, "-h", str(out)], check=True, capture_output=True)
 
 
 def test_report_of_the_sweep(tiny_sweep, run_cli, tmp_path):

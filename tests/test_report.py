@@ -139,7 +139,7 @@ def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
     runs += [("lattice-2d", "naive", 1_000, 0.5)]
     ds = _to_dataset([dict(model=m, method=k, n=n, seconds=t, n_grown=n, steps=10 * n, peak_mb=100.0, added_mb=5.0)
                       for m, k, n, t in runs])
-    ds.attrs["cost_exponent_lattice-2d"] = 1.1
+    ds.attrs["cost_exponent_lattice_2d"] = 1.1
     path = plot_bench(ds, tmp_path / "bench")
     assert path == tmp_path / "bench" / "bench.png"
     assert path.read_bytes().startswith(b"\x89PNG")
