@@ -643,9 +643,14 @@ def _particles_of(ds, index) -> tuple:
 
 
 def _cluster_value(ds, name, index):
-    """Model parameter ``name`` of cluster ``index``: its ``cluster_<name>`` value, else the dataset's scalar."""
+    """Model parameter ``name`` of cluster ``index``: its ``cluster_<name>`` value, else the dataset's scalar.
+
+    A boolean comes back as bool also from a file opened without ``open_sweep`` (int8 flags there).
+    """
     coord = f"cluster_{name}"
-    return (ds[coord][index] if coord in ds.coords else ds[name]).values.item()
+    var = ds[coord][index] if coord in ds.coords else ds[name]
+    value = var.values.item()
+    return bool(value) if var.attrs.get("flag_meanings") == _BOOLEAN else value
 
 
 def _status(ds, index) -> str:
