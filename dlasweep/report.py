@@ -279,9 +279,9 @@ def _box_local_slopes(sweep, path):
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     _save(fig, path)
     extra = f" (first 10 of {len(sweep.configs)} configurations)" if len(sweep.configs) > 10 else ""
-    return ("The box-counting local slope between adjacent sides, up to the largest fitted window" + extra + ": "
-            "it rises from the particle scale and falls towards the cluster size, which is why box counting on "
-            "one finite cluster reads low. The mass-radius local slope D_eff(n) is in `dimension_vs_n`.")
+    return ("Box counting's local slope -d ln N / d ln s between adjacent box sides, mean ± std over seeds, up to "
+            "the largest fitted window" + extra + ": where it is not flat, box counting's D depends on the window "
+            "fitted. The headline's (mass-radius) local slope D_eff(n) is in `dimension_vs_n`.")
 
 
 def _dimension_vs_n(sweep, path):
