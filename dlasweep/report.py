@@ -380,18 +380,25 @@ def _anisotropy(sweep, path):
     ax.axhline(0, color="k", lw=0.8)
     _log_x(ax)
     ax.set_xlabel("particles N")
-    ax.set_ylabel("anisotropy of the outer mass (95% CI)")
+    ci = _any_ci(sweep, "anisotropy")
+    ax.set_ylabel("anisotropy of the outer mass" + (" (95% CI)" if ci else ""))
     ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     _save(fig, path)
-    return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds with its 95% CI: "
-            "1 if the mass lay along the axes, 0 for an isotropic cluster. Square-lattice arms make it grow with "
-            "N; off-lattice clusters stay at 0 within their CI.")
+    return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds"
+            + (" with its 95% CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
+            "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N).")
+
+
+def _any_ci(sweep, stem) -> bool:
+    """Whether the summary has any 95% CI of ``stem`` to draw (none below ``MIN_CI_SEEDS`` clusters)."""
+    return bool(np.isfinite(sweep.s[f"{stem}_ci_lo"].values).any())
 
 
 def _dimension_spread(sweep, path):
     last = len(sweep.counts) - 1
     shown = sweep.configs[:20]
+    ci = _any_ci(sweep, "D")
     fig, (ax,) = _figure(1, max(5.0, 0.6 * len(shown) + 2), 4.2)
     for c, config in enumerate(shown):
         for e, (name, prefix) in enumerate((("mass-radius, per cluster", "D_cluster"),
@@ -403,9 +410,9 @@ def _dimension_spread(sweep, path):
             ax.scatter(x[~ok], values[~ok], s=14, marker="x", color="C3",
                        label="fit not flat" if c == 0 and e == 0 else None)
         row = sweep.row(config, last)
-        if np.isfinite(row["D_ci_lo"]):
-            ax.errorbar(c - 0.2, row["D"], yerr=[[row["D"] - row["D_ci_lo"]], [row["D_ci_hi"] - row["D"]]],
-                        color="k", capsize=3, marker="_", label="ensemble D, 95% CI" if c == 0 else None)
+        ax.errorbar([c - 0.2], [row["D"]], yerr=np.reshape(error_bars(row["D"], row["D_ci_lo"], row["D_ci_hi"]),
+                                                          (2, 1)), color="k",
+                    capsize=3, marker="_", ms=14, label=("ensemble D" + (", 95% CI" if ci else "")) if c == 0 else None)
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1)
     ax.set_xticks(range(len(shown)), [sweep.label(c) for c in shown], rotation=30, ha="right", fontsize=7)
@@ -414,7 +421,8 @@ def _dimension_spread(sweep, path):
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     _save(fig, path)
     return ("D of every seed's own fit at the largest count, both estimators (red crosses: the fit's local slope "
-            "is not flat), and the ensemble headline with its 95% CI (black).")
+            "is not flat), and the ensemble headline (black)" + (" with its 95% CI." if ci else
+                                                                  f", no CI: fewer than {MIN_CI_SEEDS} seeds."))
 
 
 def _diffusion_times(sweep, path):
@@ -490,7 +498,8 @@ def _speed_accuracy(sweep, path):
     if len(front) > 1:
         dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
                     color="k", lw=0.8, ls=":", label="Pareto front (cheapest for its accuracy)")
-    for ax, label in ((dev_d, "D(variant) - D(exact), 95% CI"), (dev_rg, "Rg(variant) / Rg(exact) - 1, 95% CI")):
+    ci = ", 95% CI" if _any_ci(sweep, "D") else ""
+    for ax, label in ((dev_d, f"D(variant) - D(exact){ci}"), (dev_rg, f"Rg(variant) / Rg(exact) - 1{ci}")):
         ax.axhline(0, color="k", lw=0.8)
         _log_x(ax)
         ax.set_xlabel("wall time per particle (s)")
@@ -503,8 +512,9 @@ def _speed_accuracy(sweep, path):
     return ("Cost per particle against the departure from the exact method (" + ", ".join(
         f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count: "
         "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
-        "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer). Bars "
-        "combine both 95% CIs.")
+        "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer)."
+        + (" Bars combine both 95% CIs." if _any_ci(sweep, "D") else
+           f" No bars and no Pareto front: fewer than {MIN_CI_SEEDS} seeds give no CI."))
 
 
 def _verdict(value, half) -> str:
@@ -566,8 +576,9 @@ def _failure(sweep, path):
         for panel, name, label in ((panels[2 * p], "D", "D, mass-radius"), (panels[2 * p + 1], "rg_over_rmax",
                                                                               "Rg / R_max")):
             for c, base in enumerate(scenes):
+                # Scenes side by side, 6 points apart: their points share x.
                 drawn |= _failure_series(sweep, panel, axis, name, base, _colour(c) if len(scenes) > 1 else "C0",
-                                         sweep.scene_label(base), last)
+                                         sweep.scene_label(base), last, 6 * (c - (len(scenes) - 1) / 2))
             if name == "D" and sweep.reference:
                 panel.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
             panel.set_xlabel(f"{axis} (exact: {text(EXACT_METHOD[axis])})")
@@ -580,8 +591,14 @@ def _failure(sweep, path):
     return _failure_caption(sweep, methods, scenes, drawn)
 
 
-def _failure_series(sweep, panel, axis, name, base, colour, scene, last) -> set:
-    """One scene's values along one method axis, and its exact method; returns what it drew."""
+def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) -> set:
+    """One scene's values along one method axis (``shift`` points to the right), and its exact method.
+
+    Returns what it drew.
+    """
+    from matplotlib.transforms import ScaledTranslation
+
+    moved = panel.transData + ScaledTranslation(shift / 72, 0, panel.figure.dpi_scale_trans)
     exact, varied = sweep.one_factor(axis, base)
     rows = [sweep.row(c, last) for c in varied]
     xs = np.array([float(r[axis]) for r in rows])
@@ -589,7 +606,11 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last) -> set:
     lo, hi = np.array([r[f"{name}_ci_lo"] for r in rows]), np.array([r[f"{name}_ci_hi"] for r in rows])
     drawn = {"ci"} if np.isfinite(lo).any() else set()
     panel.errorbar(xs, y, yerr=error_bars(y, lo, hi), color=colour, marker="o", capsize=2, ls="-",
-                   label=scene or f"{axis} varied")
+                   label=scene or f"{axis} varied", transform=moved)
+    # A shifted transform keeps matplotlib from seeing the points: tell it where they are.
+    seen = np.c_[np.r_[xs, xs, xs], np.r_[y, lo, hi]]
+    panel.update_datalim(seen[np.isfinite(seen).all(axis=1)])
+    panel.autoscale_view()
     _mark_missing(panel, xs, y)
     if sweep.ds[axis].dtype == bool:
         panel.set_xticks(xs, [text(bool(x)) for x in xs])
@@ -597,6 +618,7 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last) -> set:
     flagged = np.array([r["flagged"] for r in rows], bool)
     if flagged.any():
         panel.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3,
+                      transform=moved,
                       label=None if "flagged" in panel.get_legend_handles_labels()[1] else "flagged")
         drawn.add("flagged")
     if not exact:
@@ -610,7 +632,8 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last) -> set:
     for x, r in zip(xs, rows):
         units = bias(r, ref, name)
         if np.isfinite(units):
-            panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4, -9), textcoords="offset points")
+            panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4 + shift, -9),
+                           textcoords="offset points", color=colour)
             drawn.add("bias")
     return drawn | {"exact"}
 

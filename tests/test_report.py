@@ -274,3 +274,13 @@ def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_p
     # Jumps on and off count different moves: kept apart by line style and said in the caption.
     assert [line.get_linestyle() for line in depth.get_lines()] == ["-", "--"]
     assert "not on one time scale" in caption
+
+
+def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tmp_path):
+    from dlasweep.report import _anisotropy, _dimension_spread, _speed_accuracy
+
+    ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(200, 400), seeds=2)
+    for plot in (_anisotropy, _dimension_spread, _speed_accuracy):
+        fig, caption = drawn(monkeypatch, plot, ds, tmp_path, caption=True)
+        assert "95% CI" not in caption and "fewer than 10" in caption, (plot.__name__, caption)
+        assert not any("95% CI" in ax.get_ylabel() for ax in fig.axes if ax.get_visible()), plot.__name__
