@@ -612,10 +612,12 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) 
     panel.update_datalim(seen[np.isfinite(seen).all(axis=1)])
     panel.autoscale_view()
     _mark_missing(panel, xs, y)
+    if not np.isfinite(y).all():
+        drawn.add("missing")
     if sweep.ds[axis].dtype == bool:
         panel.set_xticks(xs, [text(bool(x)) for x in xs])
         panel.set_xlim(-0.5, 1.5)
-    flagged = np.array([r["flagged"] for r in rows], bool)
+    flagged = np.array([r["flagged"] for r in rows], bool) & np.isfinite(y)
     if flagged.any():
         panel.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3,
                       transform=moved,
@@ -646,8 +648,8 @@ def _failure_caption(sweep, methods, scenes, drawn) -> str:
         parts.append(f"one colour per scene of the model ({len(scenes)}: its swept parameters)")
     if "exact" in drawn:
         parts.append("the dotted line is the exact method's value" + (
-            " and the shaded band its 95% CI (an infinite kill radius or an exact contact has no point on "
-            "the axis, so it is a band)" if "band" in drawn else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)"))
+            " and the shaded band its 95% CI, drawn across the panel (an infinite kill radius or an exact "
+            "contact has no place on the axis)" if "band" in drawn else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)"))
     if "no exact" in drawn:
         parts.append("some scenes have no exact-method configuration in the sweep, so nothing to compare with")
     if "bias" in drawn:
@@ -657,6 +659,8 @@ def _failure_caption(sweep, methods, scenes, drawn) -> str:
         parts.append("bars are 95% CIs")
     if "flagged" in drawn:
         parts.append("red rings: a cluster stopped early")
+    if "missing" in drawn:
+        parts.append("a red cross on the bottom edge: a variant with no value at this N (no cluster reached it)")
     return "; ".join(parts) + "."
 
 
