@@ -5,8 +5,9 @@ estimate: the seed-averaged radius of gyration <Rg>(n) over the growth
 histories of every cluster that reached N, fitted as n ~ <Rg>**D over the
 widest flat window between the end of the transient (5% of N) and N
 (``fit.fit_mass_radius``). Its 95% CI is a percentile bootstrap over seeds
-with the window held fixed. Every cluster that reached N enters; none is
-dropped for its own fit.
+with the window held fixed, given from ``MIN_CI_SEEDS`` clusters on (every
+interval over seeds is; below, ``D_ci_reason`` says why there is none).
+Every cluster that reached N enters; none is dropped for its own fit.
 
 Beside it: the local slope D_eff(n) of the same ensemble curve over each
 octave of n with its bootstrap band; D_inf, the extrapolation
@@ -529,7 +530,8 @@ def headline(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        ``D``, ``D_ci_lo``, ``D_ci_hi`` on the configuration dims.
+        ``D``, ``D_ci_lo``, ``D_ci_hi`` on the configuration dims; the CI is
+        NaN below ``MIN_CI_SEEDS`` clusters.
     """
     sweep = _Sweep(ds)
     n = int(sweep.counts[-1])

@@ -152,7 +152,8 @@ def _markdown_table(sweep) -> str:
 
 def _write_table(sweep, path) -> Path:
     path.write_text(
-        "Every interval is a 95% confidence interval (bootstrap over seeds). D mass-radius: one fit of "
+        f"Every interval is a 95% confidence interval (bootstrap over seeds), given from {MIN_CI_SEEDS} "
+        "clusters on. D mass-radius: one fit of "
         "n ~ <Rg>^D to the seed-averaged growth histories of every cluster that reached N, over the window "
         "given. Box counting: mean of every cluster's own fit (in brackets: the share of fits whose local "
         "slope is flat). ⚠: some cluster stopped early.\n\n"
