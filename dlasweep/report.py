@@ -511,7 +511,7 @@ def _speed_accuracy(sweep, path):
     fig.suptitle(f"Speed against accuracy at N={sweep.counts[last]}")
     _save(fig, path)
     return ("Cost per particle against the departure from the exact method (" + ", ".join(
-        f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count: "
+        f"{m}={text(EXACT_METHOD[m])}" for m in methods) + ") with the other parameters equal, at the largest count: "
         "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
         "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer)."
         + (" Bars combine both 95% CIs." if _any_ci(sweep, "D") else
@@ -551,7 +551,7 @@ def _deviation_table(sweep) -> list:
     rows = [sweep.row(c, last) for c in sweep.configs]
     if not methods or not any(np.isfinite(r["rg_mean_vs_exact"]) for r in rows):
         return []
-    lines = [f"Each variant against the exact method ({', '.join(f'{m}={EXACT_METHOD[m]}' for m in methods)}) with "
+    lines = [f"Each variant against the exact method ({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}) with "
              f"the other parameters equal, at N = {sweep.counts[last]}: the difference ± its 95% CI half-width; "
              "resolved when the interval excludes zero, otherwise bounded.", "",
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
@@ -570,7 +570,8 @@ def _failure(sweep, path):
     if not methods:
         return None
     last = len(sweep.counts) - 1
-    scenes = sweep.scenes()[:10]
+    every = sweep.scenes()
+    scenes = every[:10]
     fig, panels = _figure(2 * len(methods), 4.0, 3.3)
     drawn = set()
     for p, axis in enumerate(methods):
@@ -589,7 +590,7 @@ def _failure(sweep, path):
     fig.suptitle(f"Shortcuts against the exact method at N={sweep.counts[last]}, the model's parameters equal"
                  + numbers, fontsize=9)
     _save(fig, path)
-    return _failure_caption(sweep, methods, scenes, drawn)
+    return _failure_caption(methods, scenes, len(every), drawn)
 
 
 def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) -> set:
@@ -641,12 +642,13 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) 
     return drawn | {"exact"}
 
 
-def _failure_caption(sweep, methods, scenes, drawn) -> str:
+def _failure_caption(methods, scenes, every, drawn) -> str:
     """What the failure map drew, and only that."""
     parts = [f"D and Rg/R_max as each shortcut ({', '.join(methods)}) departs from the exact method "
              f"({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}), the other parameters equal"]
     if len(scenes) > 1:
-        parts.append(f"one colour per scene of the model ({len(scenes)}: its swept parameters)")
+        parts.append(f"one colour per scene, a setting of the model's swept parameters ({every} scenes"
+                     + (f", the first {len(scenes)} drawn)" if every > len(scenes) else ")"))
     if "exact" in drawn:
         parts.append("the dotted line is the exact method's value" + (
             " and the shaded band its 95% CI, drawn across the panel (an infinite kill radius or an exact "
