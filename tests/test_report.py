@@ -284,3 +284,18 @@ def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tm
         fig, caption = drawn(monkeypatch, plot, ds, tmp_path, caption=True)
         assert "95% CI" not in caption and "fewer than 10" in caption, (plot.__name__, caption)
         assert not any("95% CI" in ax.get_ylabel() for ax in fig.axes if ax.get_visible()), plot.__name__
+
+
+def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
+    from dlasweep.analysis import MIN_CI_SEEDS
+
+    ds = synthetic_sweep({"stickiness": [1.0, 0.1]}, counts=(100, 300), seeds=MIN_CI_SEEDS)
+    sweep = Readout(ds)
+    ((low, high, value, half),) = sweep.differences(1)
+    one, two = sweep.row(low, 1), sweep.row(high, 1)
+    assert value == two["D"] - one["D"] and 0 < half < abs(value) + 1
+    assert half == pytest.approx(np.hypot(one["D_ci_hi"] - one["D_ci_lo"], two["D_ci_hi"] - two["D_ci_lo"]) / 2)
+    report(ds, tmp_path)
+    line = next(l for l in (tmp_path / "report.md").read_text().splitlines()
+                if l.startswith("- stickiness=0.1 against stickiness=1.0: "))
+    assert line.endswith("(resolved)") == (abs(value) > half) and ("|dev| <" in line) == (abs(value) <= half)
