@@ -20,9 +20,9 @@ import numpy as np
 
 from .analysis import (
     EXACT_METHOD,
+    MIN_CI_SEEDS,
     Readout,
     bias,
-    cluster_radius,
     error_bars,
     fitted_line,
     fitted_scales,
@@ -32,10 +32,8 @@ from .analysis import (
 )
 from .bench import exponent_attribute
 from .fit import MIN_DECADES, START_FRACTION
+from .params import text
 from .pictures import draw_points
-
-FAILURE_AXES = ("kill_factor", "step", "size", "stickiness")
-"""Parameters whose extremes are expected to break the model or the measurement."""
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
@@ -167,12 +165,14 @@ def _interval(row, name) -> str:
 
 
 def _headline(row) -> str:
-    text = _interval(row, "D")
-    if text != "-":
-        text += f" over N {row['D_range_lo']:.0f}-{row['D_range_hi']:.0f}"
+    shown = _interval(row, "D")
+    if shown != "-":
+        if row["D_ci_reason"] and np.isfinite(row["D"]):
+            shown = shown.replace("(no CI)", f"(no CI: {row['D_seeds']} < {MIN_CI_SEEDS} clusters)")
+        shown += f" over N {row['D_range_lo']:.0f}-{row['D_range_hi']:.0f}"
         if not row["D_ok"]:
-            text += " (local slope not flat)"
-    return f"{text}, {row['D_seeds']} clusters"
+            shown += " (local slope not flat)"
+    return f"{shown}, {row['D_seeds']} clusters"
 
 
 def _markdown_table(sweep) -> str:
@@ -196,7 +196,8 @@ def _markdown_table(sweep) -> str:
 
 def _write_table(sweep, path) -> Path:
     path.write_text(
-        "Every interval is a 95% confidence interval (bootstrap over seeds). D mass-radius: one fit of "
+        f"Every interval is a 95% confidence interval (bootstrap over seeds), given from {MIN_CI_SEEDS} "
+        "clusters on. D mass-radius: one fit of "
         "n ~ <Rg>^D to the seed-averaged growth histories of every cluster that reached N, over the window "
         "given. Box counting: mean of every cluster's own fit (in brackets: the share of fits whose local "
         "slope is flat). ⚠: some cluster stopped early.\n\n"
@@ -207,15 +208,15 @@ def _write_table(sweep, path) -> Path:
 
 # Plots --------------------------------------------------------------------
 
-def _figure(n_panels=1, width=4.0, height=3.4):
-    """A grid of panels on a Figure of its own (no pyplot state, no backend switch)."""
+def _figure(n_panels=1, width=4.0, height=3.4, sharey=False):
+    """A grid of panels on a Figure of its own (no pyplot state, no backend switch); ``sharey``: one y-axis."""
     from matplotlib.figure import Figure  # here, so `import dlasweep` (and dask workers) skip matplotlib
 
     cols = min(n_panels, 4)
     rows = -(-n_panels // cols)
     # A one-panel figure still needs room for its title and a legend below it.
     fig = Figure(figsize=(max(width * cols, _MIN_WIDTH), height * rows), layout="constrained")
-    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    axes = fig.subplots(rows, cols, squeeze=False, sharey=sharey).ravel()
     for ax in axes[n_panels:]:
         ax.set_visible(False)
     return fig, axes[:n_panels]
@@ -303,7 +304,7 @@ def _box_counts(sweep, path):
             "it reads low.")
 
 
-def _local_slopes(sweep, path):
+def _box_local_slopes(sweep, path):
     slope = sweep.s["box_slope"].values
     if slope.shape[-1] == 0 or not np.isfinite(slope).any():
         return None
@@ -318,27 +319,33 @@ def _local_slopes(sweep, path):
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"off-lattice reference {sweep.reference}")
     ax.set_xlabel("box side s")
-    ax.set_ylabel("-d ln N / d ln s (mean ± std over seeds)")
+    ax.set_ylabel("box-counting slope -d ln N / d ln s\n(mean ± std over seeds)")
     ax.set_title(f"Box-counting local slope at N={sweep.counts[-1]}", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     _save(fig, path)
     extra = f" (first 10 of {len(sweep.configs)} configurations)" if len(sweep.configs) > 10 else ""
-    return ("The box-counting local slope between adjacent sides, up to the largest fitted window" + extra + ": "
-            "it rises from the particle scale and falls towards the cluster size, which is why box counting on "
-            "one finite cluster reads low. The mass-radius local slope D_eff(n) is in `dimension_vs_n`.")
+    return ("Box counting's local slope -d ln N / d ln s between adjacent box sides, mean ± std over seeds, up to "
+            "the largest fitted window" + extra + ": where it is not flat, box counting's D depends on the window "
+            "fitted. The headline's (mass-radius) local slope D_eff(n) is in `dimension_vs_n`.")
 
 
 def _dimension_vs_n(sweep, path):
     if not np.isfinite(sweep.s["D"].values).any():
         return None
     shown = sweep.configs[:_MAX_PANELS]
-    fig, axes = _figure(len(shown), 4.2, 3.4)
+    # Whether any interval is drawn: below MIN_CI_SEEDS clusters there is none, and the words say so.
+    bars = bool(np.isfinite(sweep.s["D_ci_lo"].values).any())
+    band = bool(np.isfinite(sweep.s["D_local_ci_lo"].values).any())
+    inf = [c for c in shown if np.isfinite(sweep.at("D_inf", c))]
+    # One y-axis: panels compare by eye.
+    fig, axes = _figure(len(shown), 4.2, 3.4, sharey=True)
     n_local = sweep.s["n_local"].values
     for ax, config in zip(axes, shown):
         if len(n_local):
             ax.fill_between(n_local, sweep.at("D_local_ci_lo", config), sweep.at("D_local_ci_hi", config),
-                            color="C0", alpha=0.15, lw=0, label="local slope D_eff(n), 95% band")
-            ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8)
+                            color="C0", alpha=0.15, lw=0)
+            ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8,
+                    label="local slope D_eff(n)" + (", 95% band" if band else ""))
         for e, (name, title) in enumerate(ESTIMATORS):
             mean, err = sweep.bars(name, config)
             ax.errorbar(sweep.counts * (1.06 if e else 1.0), mean, yerr=err, color=f"C{3 * e}", marker="os"[e],
@@ -346,7 +353,7 @@ def _dimension_vs_n(sweep, path):
         for n, d, seeds in zip(sweep.counts, sweep.at("D", config), sweep.at("D_seeds", config)):
             if np.isfinite(d):
                 ax.annotate(f"{seeds}", (n, d), fontsize=6, xytext=(0, 6), textcoords="offset points", ha="center")
-        if np.isfinite(sweep.at("D_inf", config)):
+        if config in inf:
             ax.axhspan(sweep.at("D_inf_ci_lo", config), sweep.at("D_inf_ci_hi", config), color="C2", alpha=0.2,
                        lw=0, label="D_inf, 95% CI")
         if sweep.reference:
@@ -355,14 +362,29 @@ def _dimension_vs_n(sweep, path):
         ax.set_title(sweep.label(config), fontsize=8)
         ax.set_xlabel("particles N")
         ax.set_ylabel("D")
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
-    fig.suptitle("D against cluster size (bars: 95% CI; numbers: clusters in the ensemble)", fontsize=9)
+    fig.legend(*_legend(axes), loc="outside lower center", fontsize=6, ncols=3)
+    fig.suptitle("D against cluster size (" + ("bars: 95% CI; " if bars else f"no CI: fewer than {MIN_CI_SEEDS} "
+                 "clusters; ") + "numbers: clusters in the ensemble)", fontsize=9)
     _save(fig, path)
-    reference = (f"the dashed line is the {sweep.dim}D off-lattice reference" if sweep.reference
-                 else "no reference line: the off-lattice value is not the lattice model's")
-    return ("One panel per configuration: the headline ensemble mass-radius D at each N (filled) with the number "
-            "of clusters in it, the mean box-counting D (open squares, reads low), the local slope D_eff(n) with "
-            "its band, and D_inf where the extrapolation holds; " + reference + ".")
+    said = ["the headline ensemble mass-radius D at each N (filled) with the number of clusters in it",
+            "the mean box-counting D (open squares, reads low)",
+            "the local slope D_eff(n)" + (" with its 95% band" if band else "")]
+    if inf:
+        said.append("D_inf with its 95% CI (green) where the extrapolation holds")
+    said.append(f"the dashed line is the {sweep.dim}D off-lattice reference" if sweep.reference
+                else "no reference line: the off-lattice value is not the lattice model's")
+    ci = ("Bars are 95% CIs" if bars else
+          f"No interval is drawn: fewer than {MIN_CI_SEEDS} clusters per configuration (see `Intervals`)")
+    return "One panel per configuration, on one y-axis: " + "; ".join(said) + ". " + ci + "."
+
+
+def _legend(axes):
+    """Handles and labels of every panel, each label once: a figure-wide legend."""
+    seen = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(label, handle)
+    return list(seen.values()), list(seen)
 
 
 def _mass_radius(sweep, path):
@@ -403,18 +425,25 @@ def _anisotropy(sweep, path):
     ax.axhline(0, color="k", lw=0.8)
     _log_x(ax)
     ax.set_xlabel("particles N")
-    ax.set_ylabel("anisotropy of the outer mass (95% CI)")
+    ci = _any_ci(sweep, "anisotropy")
+    ax.set_ylabel("anisotropy of the outer mass" + (" (95% CI)" if ci else ""))
     ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     _save(fig, path)
-    return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds with its 95% CI: "
-            "1 if the mass lay along the axes, 0 for an isotropic cluster. Square-lattice arms make it grow with "
-            "N; off-lattice clusters stay at 0 within their CI.")
+    return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds"
+            + (" with its 95% CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
+            "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N).")
+
+
+def _any_ci(sweep, stem) -> bool:
+    """Whether the summary has any 95% CI of ``stem`` to draw (none below ``MIN_CI_SEEDS`` clusters)."""
+    return bool(np.isfinite(sweep.s[f"{stem}_ci_lo"].values).any())
 
 
 def _dimension_spread(sweep, path):
     last = len(sweep.counts) - 1
     shown = sweep.configs[:20]
+    ci = _any_ci(sweep, "D")
     fig, (ax,) = _figure(1, max(5.0, 0.6 * len(shown) + 2), 4.2)
     for c, config in enumerate(shown):
         for e, (name, prefix) in enumerate((("mass-radius, per cluster", "D_cluster"),
@@ -426,9 +455,9 @@ def _dimension_spread(sweep, path):
             ax.scatter(x[~ok], values[~ok], s=14, marker="x", color="C3",
                        label="fit not flat" if c == 0 and e == 0 else None)
         row = sweep.row(config, last)
-        if np.isfinite(row["D_ci_lo"]):
-            ax.errorbar(c - 0.2, row["D"], yerr=[[row["D"] - row["D_ci_lo"]], [row["D_ci_hi"] - row["D"]]],
-                        color="k", capsize=3, marker="_", label="ensemble D, 95% CI" if c == 0 else None)
+        ax.errorbar([c - 0.2], [row["D"]], yerr=np.reshape(error_bars(row["D"], row["D_ci_lo"], row["D_ci_hi"]),
+                                                          (2, 1)), color="k",
+                    capsize=3, marker="_", ms=14, label=("ensemble D" + (", 95% CI" if ci else "")) if c == 0 else None)
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1)
     ax.set_xticks(range(len(shown)), [sweep.label(c) for c in shown], rotation=30, ha="right", fontsize=7)
@@ -437,7 +466,8 @@ def _dimension_spread(sweep, path):
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     _save(fig, path)
     return ("D of every seed's own fit at the largest count, both estimators (red crosses: the fit's local slope "
-            "is not flat), and the ensemble headline with its 95% CI (black).")
+            "is not flat), and the ensemble headline (black)" + (" with its 95% CI." if ci else
+                                                                  f", no CI: fewer than {MIN_CI_SEEDS} seeds."))
 
 
 def _diffusion_times(sweep, path):
@@ -445,18 +475,20 @@ def _diffusion_times(sweep, path):
         return None
     fig, (hist, depth) = _figure(2, 5.0, 3.8)
     bins, depths = sweep.s["diffusion_bin"].values, sweep.s["depth_bin"].values
-    for c, config in enumerate(sweep.configs[:10]):
+    jumps = {c: bool(sweep.param("jumps", c)) for c in sweep.configs[:10]}
+    for c, config in enumerate(jumps):
+        # Times with and without jumps count different moves: the line style keeps them apart.
+        style = dict(color=_colour(c), ls="-" if jumps[config] else "--")
         density = sweep.at("diffusion_density", config)
-        hist.step(bins, np.where(density > 0, density, np.nan), where="mid", color=_colour(c),
-                  label=sweep.label(config))
-        depth.semilogy(depths, sweep.at("diffusion_median", config), "o-", ms=3, color=_colour(c))
+        hist.step(bins, np.where(density > 0, density, np.nan), where="mid", label=sweep.label(config), **style)
+        depth.semilogy(depths, sweep.at("diffusion_median", config), marker="o", ms=3, **style)
     hist.set_xscale("log")
     hist.set_yscale("log")
-    hist.set_xlabel("diffusion time (walk steps or jumps to stick)")
+    hist.set_xlabel("diffusion time: moves to stick\n(one per walk step or first-passage jump)")
     hist.set_ylabel("density")
     fig.legend(*hist.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     depth.set_xlabel("distance from seed / cluster radius")
-    depth.set_ylabel("median diffusion time")
+    depth.set_ylabel("median diffusion time (moves)")
     low, high = depth.get_ylim()
     if high < 10 * low:
         # within one decade matplotlib labels minor ticks as 2.8x10^1: plain numbers read better
@@ -466,8 +498,14 @@ def _diffusion_times(sweep, path):
         depth.yaxis.set_minor_formatter(ScalarFormatter())
     fig.suptitle("Diffusion times, pooled over the stored clusters")
     _save(fig, path)
-    return ("Distribution of diffusion times (left) and their median against the depth at which the particle "
-            "stuck, as a fraction of the cluster's radius (right).")
+    unit = {frozenset([False]): " Every walk here takes single steps (jumps off): a move is one step.",
+            frozenset([True]): " Walkers here jump far from the cluster: a first-passage jump counts as one move "
+                               "however far it goes, so the time counts moves, not walk steps.",
+            frozenset([True, False]): " Walkers with jumps on count a first-passage jump as one move however far "
+                                      "it goes, those with jumps off (dashed) one move per step: the two are not "
+                                      "on one time scale."}[frozenset(jumps.values())]
+    return ("Distribution of diffusion times, in moves from release to sticking (left), and their median against "
+            "the depth at which the particle stuck, as a fraction of the cluster's radius (right)." + unit)
 
 
 _MARKERS = "*osD^vP<>Xph"
@@ -505,7 +543,8 @@ def _speed_accuracy(sweep, path):
     if len(front) > 1:
         dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
                     color="k", lw=0.8, ls=":", label="Pareto front (cheapest for its accuracy)")
-    for ax, label in ((dev_d, "D(variant) - D(exact), 95% CI"), (dev_rg, "Rg(variant) / Rg(exact) - 1, 95% CI")):
+    ci = ", 95% CI" if _any_ci(sweep, "D") else ""
+    for ax, label in ((dev_d, f"D(variant) - D(exact){ci}"), (dev_rg, f"Rg(variant) / Rg(exact) - 1{ci}")):
         ax.axhline(0, color="k", lw=0.8)
         _log_x(ax)
         ax.set_xlabel("wall time per particle (s)")
@@ -516,18 +555,37 @@ def _speed_accuracy(sweep, path):
     fig.suptitle(f"Speed against accuracy at N={sweep.counts[last]}")
     _save(fig, path)
     return ("Cost per particle against the departure from the exact method (" + ", ".join(
-        f"{m}={EXACT_METHOD[m]}" for m in methods) + ") with the other parameters equal, at the largest count: "
+        f"{m}={text(EXACT_METHOD[m])}" for m in methods) + ") with the other parameters equal, at the largest count: "
         "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
-        "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer). Bars "
-        "combine both 95% CIs.")
+        "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer)."
+        + (" Bars combine both 95% CIs." if _any_ci(sweep, "D") else
+           f" No bars and no Pareto front: fewer than {MIN_CI_SEEDS} seeds give no CI."))
 
 
 def _verdict(value, half) -> str:
     """``+0.012 ± 0.004 (resolved)`` or ``+0.001 ± 0.004 (|dev| < 0.005)``."""
     if not np.isfinite(value):
         return "-"
-    text = f"{value:+.4f} ± {half:.4f}"
-    return text + (" (resolved)" if resolved(value, half) else f" (|dev| < {abs(value) + half:.4f})")
+    if not np.isfinite(half):
+        return f"{value:+.4f} (no CI: cannot say whether resolved)"
+    shown = f"{value:+.4f} ± {half:.4f}"
+    return shown + (" (resolved)" if resolved(value, half) else f" (|dev| < {abs(value) + half:.4f})")
+
+
+def _differences(sweep) -> list:
+    """Markdown lines: whether the CIs resolve the difference in D between neighbouring scenes."""
+    last = len(sweep.counts) - 1
+    pairs = sweep.differences(last)
+    if not pairs:
+        return []
+    lines = [f"D between configurations one value apart, at N = {sweep.counts[last]}: the difference ± its 95% CI "
+             "half-width (both CIs in quadrature); resolved when that interval excludes zero, otherwise the "
+             "difference is only bounded.", ""]
+    for config, other, value, half in pairs[:_MAX_PANELS]:
+        lines.append(f"- {sweep.label(other)} against {sweep.label(config)}: {_verdict(value, half)}")
+    if len(pairs) > _MAX_PANELS:
+        lines.append(f"- ... and {len(pairs) - _MAX_PANELS} more pairs (every D and CI is in `summary.csv`)")
+    return lines + [""]
 
 
 def _deviation_table(sweep) -> list:
@@ -537,7 +595,7 @@ def _deviation_table(sweep) -> list:
     rows = [sweep.row(c, last) for c in sweep.configs]
     if not methods or not any(np.isfinite(r["rg_mean_vs_exact"]) for r in rows):
         return []
-    lines = [f"Each variant against the exact method ({', '.join(f'{m}={EXACT_METHOD[m]}' for m in methods)}) with "
+    lines = [f"Each variant against the exact method ({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}) with "
              f"the other parameters equal, at N = {sweep.counts[last]}: the difference ± its 95% CI half-width; "
              "resolved when the interval excludes zero, otherwise bounded.", "",
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
@@ -552,61 +610,111 @@ def _deviation_table(sweep) -> list:
 
 
 def _failure(sweep, path):
-    axes_present = [a for a in FAILURE_AXES if a in sweep.config_dims and sweep.ds.sizes[a] > 1]
-    if not axes_present:
+    methods = sweep.methods
+    if not methods:
         return None
     last = len(sweep.counts) - 1
-    fig, panels = _figure(2 * len(axes_present), 4.0, 3.3)
-    base = sweep.exact(sweep.configs[0]) or sweep.configs[0]
-    for p, axis in enumerate(axes_present):
-        exact_value = EXACT_METHOD.get(axis)
-        # One factor at a time: every other axis at the exact method (or its first value).
-        exact, varied = sweep.one_factor(axis, base)
+    every = sweep.scenes()
+    scenes = every[:10]
+    fig, panels = _figure(2 * len(methods), 4.0, 3.3)
+    drawn = set()
+    for p, axis in enumerate(methods):
         for panel, name, label in ((panels[2 * p], "D", "D, mass-radius"), (panels[2 * p + 1], "rg_over_rmax",
-                                                                             "Rg / R_max")):
-            rows = [sweep.row(c, last) for c in varied]
-            xs = np.array([float(r[axis]) for r in rows])
-            if axis == "size":
-                xs = xs / np.array([cluster_radius(r) for r in rows])
-            y = np.array([r[name] for r in rows])
-            err = error_bars(y, np.array([r[f"{name}_ci_lo"] for r in rows]),
-                             np.array([r[f"{name}_ci_hi"] for r in rows]))
-            panel.errorbar(xs, y, yerr=err, color="C0", marker="o", capsize=2, ls="-", label=f"{axis} varied")
-            _mark_missing(panel, xs, y)
-            flagged = np.array([r["flagged"] for r in rows], bool)
-            panel.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3,
-                          label="a cluster stopped early" if flagged.any() else None)
-            if exact:
-                ref = sweep.row(exact[0], last)
-                panel.axhspan(ref[f"{name}_ci_lo"], ref[f"{name}_ci_hi"], color="0.6", alpha=0.3, lw=0,
-                              label=f"exact ({axis}={exact_value}), 95% CI")
-                panel.axhline(ref[name], color="0.4", lw=1)
-                for x, r in zip(xs, rows):
-                    units = bias(r, ref, name)
-                    if np.isfinite(units):
-                        panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4, -9),
-                                       textcoords="offset points")
+                                                                              "Rg / R_max")):
+            for c, base in enumerate(scenes):
+                # Scenes side by side, 6 points apart: their points share x.
+                drawn |= _failure_series(sweep, panel, axis, name, base, _colour(c) if len(scenes) > 1 else "C0",
+                                         sweep.scene_label(base), last, 6 * (c - (len(scenes) - 1) / 2))
             if name == "D" and sweep.reference:
                 panel.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
-            panel.set_xlabel("box side / cluster radius" if axis == "size" else axis)
-            if axis == "size" and len(xs) > 1:
-                _log_x(panel)
-            panel.set_ylabel(f"{label} (95% CI)")
+            panel.set_xlabel(f"{axis} (exact: {text(EXACT_METHOD[axis])})")
+            panel.set_ylabel(f"{label}" + (" (95% CI)" if "ci" in drawn else ""))
             panel.legend(fontsize=6, loc="best")
-    fig.suptitle(f"Where methods fail, at N={sweep.counts[last]}: one parameter varied, the rest exact\n"
-                 "(numbers: bias in units of the combined 95% CI half-width)", fontsize=9)
+    numbers = "\n(numbers: bias in units of the combined 95% CI half-width)" if "bias" in drawn else ""
+    fig.suptitle(f"Shortcuts against the exact method at N={sweep.counts[last]}, the model's parameters equal"
+                 + numbers, fontsize=9)
     _save(fig, path)
-    return ("D and Rg/R_max against each parameter that breaks the model or its measurement ("
-            + ", ".join(axes_present) + "), the others held at the exact method. The grey band is the exact "
-            "method's value with its 95% CI (kill_factor 0 is an infinite kill radius and size 0 an unbounded "
-            "box, so they are drawn as bands, not points); each point is labelled with its bias in units of the "
-            "combined CI half-width: beyond +-1 the bias is resolved.")
+    return _failure_caption(methods, scenes, len(every), drawn)
+
+
+def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) -> set:
+    """One scene's values along one method axis (``shift`` points to the right), and its exact method.
+
+    Returns what it drew.
+    """
+    from matplotlib.transforms import ScaledTranslation
+
+    moved = panel.transData + ScaledTranslation(shift / 72, 0, panel.figure.dpi_scale_trans)
+    exact, varied = sweep.one_factor(axis, base)
+    rows = [sweep.row(c, last) for c in varied]
+    xs = np.array([float(r[axis]) for r in rows])
+    y = np.array([r[name] for r in rows])
+    lo, hi = np.array([r[f"{name}_ci_lo"] for r in rows]), np.array([r[f"{name}_ci_hi"] for r in rows])
+    drawn = {"ci"} if np.isfinite(lo).any() else set()
+    panel.errorbar(xs, y, yerr=error_bars(y, lo, hi), color=colour, marker="o", capsize=2, ls="-",
+                   label=scene or f"{axis} varied", transform=moved)
+    # A shifted transform keeps matplotlib from seeing the points: tell it where they are.
+    seen = np.c_[np.r_[xs, xs, xs], np.r_[y, lo, hi]]
+    panel.update_datalim(seen[np.isfinite(seen).all(axis=1)])
+    panel.autoscale_view()
+    _mark_missing(panel, xs, y)
+    if not np.isfinite(y).all():
+        drawn.add("missing")
+    if sweep.ds[axis].dtype == bool:
+        panel.set_xticks(xs, [text(bool(x)) for x in xs])
+        panel.set_xlim(-0.5, 1.5)
+    flagged = np.array([r["flagged"] for r in rows], bool) & np.isfinite(y)
+    if flagged.any():
+        panel.scatter(xs[flagged], y[flagged], s=80, facecolors="none", edgecolors="C3", lw=1.2, zorder=3,
+                      transform=moved,
+                      label=None if "flagged" in panel.get_legend_handles_labels()[1] else "flagged")
+        drawn.add("flagged")
+    if not exact:
+        return drawn | {"no exact"}
+    ref = sweep.row(exact[0], last)
+    if np.isfinite(ref[f"{name}_ci_lo"]):
+        panel.axhspan(ref[f"{name}_ci_lo"], ref[f"{name}_ci_hi"], color=colour, alpha=0.15, lw=0,
+                      label=None if scene else "exact method, 95% CI")
+        drawn.add("band")
+    panel.axhline(ref[name], color=colour, lw=1, ls=":", label=None if scene else "exact method")
+    for x, r in zip(xs, rows):
+        units = bias(r, ref, name)
+        if np.isfinite(units):
+            panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4 + shift, -9),
+                           textcoords="offset points", color=colour)
+            drawn.add("bias")
+    return drawn | {"exact"}
+
+
+def _failure_caption(methods, scenes, every, drawn) -> str:
+    """What the failure map drew, and only that."""
+    parts = [f"D and Rg/R_max as each shortcut ({', '.join(methods)}) departs from the exact method "
+             f"({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}), the other parameters equal"]
+    if len(scenes) > 1:
+        parts.append(f"one colour per scene, a setting of the model's swept parameters ({every} scenes"
+                     + (f", the first {len(scenes)} drawn)" if every > len(scenes) else ")"))
+    if "exact" in drawn:
+        parts.append("the dotted line is the exact method's value" + (
+            " and the shaded band its 95% CI, drawn across the panel (an infinite kill radius or an exact "
+            "contact has no place on the axis)" if "band" in drawn else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)"))
+    if "no exact" in drawn:
+        parts.append("some scenes have no exact-method configuration in the sweep, so nothing to compare with")
+    if "bias" in drawn:
+        parts.append("each point is labelled with its bias in units of the combined 95% CI half-width: beyond "
+                     "+-1 the bias is resolved")
+    if "ci" in drawn:
+        parts.append("bars are 95% CIs")
+    if "flagged" in drawn:
+        parts.append("red rings: a cluster stopped early")
+    if "missing" in drawn:
+        parts.append("a red cross on the bottom edge: a variant with no value at this N (no cluster reached it)")
+    return "; ".join(parts) + "."
 
 
 _PLOTS = {
     "gallery": _gallery,
     "box_counts": _box_counts,
-    "local_slopes": _local_slopes,
+    "box_local_slopes": _box_local_slopes,
     "dimension_vs_n": _dimension_vs_n,
     "mass_radius": _mass_radius,
     "anisotropy": _anisotropy,
@@ -629,7 +737,7 @@ def _write_report(sweep, figures, path) -> Path:
     ds = sweep.ds
     last = len(sweep.counts) - 1
     rows = [(sweep.label(c), sweep.row(c, last)) for c in sweep.configs]
-    deviations = _deviation_table(sweep)
+    deviations, differences = _deviation_table(sweep), _differences(sweep)
     attrs = sweep.s.attrs
     lines = [
         f"# {ds.attrs.get('title', 'dlasweep sweep')}",
@@ -673,6 +781,7 @@ def _write_report(sweep, figures, path) -> Path:
         "Each cluster's fit gives a standard error that includes the drift of its local slope; the table "
         "gives the mean over every cluster and the share of fits that are flat.",
         "",
+        *(["## Between configurations", "", *differences] if differences else []),
         *(["## Against the exact method", "", *deviations] if deviations else []),
         "## Summary table",
         "",

@@ -74,7 +74,9 @@ def test_headline_of_offlattice_dla_covers_the_reference(offlattice):
 
 
 def test_extrapolation_is_refused_when_the_data_do_not_allow_it():
-    ds = synthetic_sweep({"stickiness": [1.0]}, counts=(150, 300), seeds=3)
+    from dlasweep.analysis import MIN_CI_SEEDS
+
+    ds = synthetic_sweep({"stickiness": [1.0]}, counts=(150, 300), seeds=MIN_CI_SEEDS)
     s = dla.summarise(ds)
     assert np.isnan(s["D_inf"]).all()
     assert "octaves" in str(s["D_inf_reason"].values.ravel()[0])
@@ -119,3 +121,63 @@ def test_the_headline_a_target_watches_is_the_summary_s(offlattice):
     top, last = headline(ds), s.isel(n_particles=-1)
     for name in ("D", "D_ci_lo", "D_ci_hi"):
         np.testing.assert_array_equal(top[name].values, last[name].values)
+
+
+def _known_histories(rng, seeds, counts, D=1.7, sigma=0.05):
+    """Growth histories with n = (Rg/a)**D on average: each seed's log Rg a Brownian walk in log n about that line.
+
+    The noise is lognormal with mean 1 at every n (a martingale), so the
+    seed-averaged <Rg>(n) is a * n**(1/D) exactly and the true D is known;
+    sigma gives seed-to-seed spreads of D like DLA clusters of 10**4.
+    """
+    t = np.log(counts)
+    elapsed = t - t[0] + 1.0
+    walk = sigma * np.cumsum(rng.normal(size=(seeds, len(t))) * np.sqrt(np.diff(t, prepend=t[0] - 1.0)), axis=1)
+    return 2.0 * counts ** (1 / D) * np.exp(walk - sigma**2 * elapsed / 2)
+
+
+def _coverage(seeds, ensembles=300):
+    """Share of ensembles whose headline 95% CI holds the true D, and how many gave an interval."""
+    from dlasweep.analysis import _headline
+
+    counts, rng = mass_radius_counts(10_000), np.random.default_rng(seeds)
+    hits = given = 0
+    for i in range(ensembles):
+        _, lo, hi, _ = _headline(_known_histories(rng, seeds, counts), counts, np.random.default_rng(i), 400)
+        given += np.isfinite(lo)
+        hits += lo <= 1.7 <= hi
+    return hits / ensembles, given
+
+
+def test_intervals_start_at_the_seed_count_from_which_they_cover():
+    # From MIN_CI_SEEDS seeds the headline "95%" CI holds the true D in at
+    # least 90% of ensembles (300 ensembles: a binomial standard error of
+    # 0.017, so >= 0.87 measured); below, the same bootstrap covers far less
+    # (0.79 at 4 seeds in 1000 ensembles), so the summary gives no interval.
+    from dlasweep.analysis import MIN_CI_SEEDS, _headline
+
+    for seeds in (MIN_CI_SEEDS, MIN_CI_SEEDS + 2):
+        covered, given = _coverage(seeds)
+        assert given == 300 and covered >= 0.87, (seeds, covered)
+    counts = mass_radius_counts(10_000)
+    below = _known_histories(np.random.default_rng(0), MIN_CI_SEEDS - 1, counts)
+    fit, lo, hi, why = _headline(below, counts, np.random.default_rng(0), 400)
+    assert np.isfinite(fit.D) and np.isnan(lo) and np.isnan(hi) and f"fewer than the {MIN_CI_SEEDS} a 95% CI needs" in why
+
+
+def test_below_the_threshold_the_bootstrap_would_not_cover(monkeypatch):
+    # What the threshold keeps out: the same interval over 4 seeds.
+    from dlasweep import analysis
+
+    monkeypatch.setattr(analysis, "MIN_CI_SEEDS", 2)
+    covered, given = _coverage(4)
+    assert given == 300 and covered < 0.85, covered
+
+
+def test_a_sweep_of_few_seeds_gives_d_and_says_why_it_has_no_interval():
+    ds = synthetic_sweep({"stickiness": [1.0]}, counts=(150, 300), seeds=3)
+    s = dla.summarise(ds).isel(size=0, n_particles=-1, stickiness=0)
+    assert np.isfinite(s["D"]) and np.isnan(s["D_ci_lo"]) and np.isnan(s["D_ci_hi"])
+    assert "3 clusters reached N, fewer than the 10 a 95% CI needs" in str(s["D_ci_reason"].values)
+    for name in ("rg", "rg_over_rmax", "D_box", "anisotropy"):
+        assert np.isnan(s[f"{name}_ci_lo"]) and np.isnan(s[f"{name}_ci_hi"])

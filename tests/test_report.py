@@ -73,7 +73,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
     return ds
 
 
-ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "local_slopes.png", "mass_radius.png", "anisotropy.png",
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "box_local_slopes.png", "mass_radius.png", "anisotropy.png",
           "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
 
 
@@ -81,8 +81,8 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     ds = synthetic_sweep({"stickiness": [1.0, 0.5]})
     written = report(ds, tmp_path / "out")
     names = {p.name for p in written}
-    # stickiness is a failure axis; no method axis is swept, so no speed-accuracy chart.
-    assert names == ALWAYS | {"failure.png"}
+    # stickiness is the model, not a method: no failure map, and no speed-accuracy chart.
+    assert names == ALWAYS
     assert {p.name for p in (tmp_path / "out").iterdir()} == names
     for path in written:
         assert path.stat().st_size > 0
@@ -91,12 +91,17 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     assert {r["stickiness"] for r in rows} == {"1.0", "0.5"}
     assert all(r["seeds"] == "3" and r["status"] == "ok:3" for r in rows)
     big = [r for r in rows if r["n_particles"] == "800"]
-    assert all(1.3 < float(r["D"]) < 2.1 and float(r["D_ci_lo"]) < float(r["D"]) < float(r["D_ci_hi"]) for r in big)
+    # Three seeds give D and no interval, and say why.
+    assert all(1.3 < float(r["D"]) < 2.1 and r["D_ci_lo"] == "nan" and "fewer than the" in r["D_ci_reason"]
+               for r in big)
     text = (tmp_path / "out" / "report.md").read_text()
     for name in names - {"report.md", "summary.csv", "summary.md"}:
         assert f"({name})" in text
     assert "speed_accuracy" not in text and "reads low" in text and "1.7100(3)" in text
     assert text.count("95% confidence interval") == 1
+    assert "no CI: 3 < 10 clusters" in text
+    # Whether the difference between the two configurations is resolved, said, not left to the reader.
+    assert "- stickiness=0.5 against stickiness=1.0: " in text and "cannot say whether resolved" in text
 
 
 def test_report_tells_its_progress_step_by_step(tmp_path):
@@ -148,7 +153,7 @@ def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
 THIRTY = """
 [grid]
 n_particles = [60, 120]
-seeds = 3
+seeds = 10
 [model]
 model = "offlattice"
 kill_factor = [0.0, 1.2, 1.5, 2.0, 3.0]
@@ -166,18 +171,18 @@ def thirty_variants(dask_client):
     return dla.run_sweep(parse_spec(THIRTY), client=dask_client)
 
 
-def drawn(monkeypatch, plot, ds, tmp_path):
-    """Run one plot of the report and return its Figure instead of only a file."""
+def drawn(monkeypatch, plot, ds, tmp_path, caption=False):
+    """Run one plot of the report and return its Figure (and its caption) instead of only a file."""
     import importlib
 
     module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
     figures = []
     monkeypatch.setattr(module, "_save", lambda fig, path: figures.append(fig) or fig.savefig(path))
-    caption = plot(Readout(ds), tmp_path / "plot.png")
-    assert caption and (tmp_path / "plot.png").stat().st_size > 0
+    said = plot(Readout(ds), tmp_path / "plot.png")
+    assert said and (tmp_path / "plot.png").stat().st_size > 0
     (fig,) = figures
     fig.canvas.draw()
-    return fig
+    return (fig, said) if caption else fig
 
 
 def overlaps(a, b):
@@ -206,28 +211,91 @@ def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, mon
 def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_variants, monkeypatch, tmp_path):
     from dlasweep.report import _failure
 
-    fig = drawn(monkeypatch, _failure, thirty_variants, tmp_path)
+    fig, caption = drawn(monkeypatch, _failure, thirty_variants, tmp_path, caption=True)
     panels = [ax for ax in fig.axes if ax.get_visible()]
-    assert [ax.get_xlabel() for ax in panels] == ["kill_factor"] * 2 + ["step"] * 2
+    # The shortcuts, each against the exact method; jumps too, which the old map left out.
+    assert [ax.get_xlabel() for ax in panels] == (["kill_factor (exact: 0.0)"] * 2 + ["jumps (exact: true)"] * 2
+                                                  + ["step (exact: 0.0)"] * 2)
     for ax in panels:
         (series,) = ax.containers
         xs = series.lines[0].get_xdata()
-        assert 0.0 not in xs and len(xs) in (2, 4)  # the non-exact values only
-        assert series.has_yerr
-        assert any("exact" in t.get_text() for t in ax.get_legend().get_texts())
+        assert 0.0 not in xs or ax.get_xlabel().startswith("jumps")  # the non-exact values only
+        assert len(xs) in (1, 2, 4) and series.has_yerr
+        assert any("exact method, 95% CI" == t.get_text() for t in ax.get_legend().get_texts())
         # The bias of every point in units of the CI is written beside it.
         assert len(ax.texts) == len(xs)
+    assert "numbers: bias" in fig._suptitle.get_text()
+    assert "shaded band its 95% CI" in caption and "bias in units" in caption and "scene" not in caption
+
+
+def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch, tmp_path):
+    from dlasweep.report import _failure
+
+    assert _failure(Readout(synthetic_sweep({"stickiness": [1.0, 0.5]}, counts=(200, 400), seeds=2)),
+                    tmp_path / "none.png") is None
+    # Two seeds: no CIs, so no band and no bias numbers, and neither is promised.
+    ds = synthetic_sweep({"kill_factor": [0.0, 2.0], "stickiness": [1.0, 0.5]}, counts=(200, 400), seeds=2)
+    fig, caption = drawn(monkeypatch, _failure, ds, tmp_path, caption=True)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_xlabel() for ax in panels] == ["kill_factor (exact: 0.0)"] * 2
+    assert all(len(ax.containers) == 2 and not ax.texts for ax in panels)  # one series per scene
+    assert "numbers" not in fig._suptitle.get_text()
+    assert "band" not in caption and "bias" not in caption and "bars" not in caption
+    assert "no CI: fewer than 10 seeds" in caption and "one colour per scene" in caption
 
 
 def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_path):
     from dlasweep.report import _dimension_vs_n, _mass_radius
 
     ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=3)
-    fig = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path)
+    fig, caption = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path, caption=True)
     panels = [ax for ax in fig.axes if ax.get_visible()]
     assert [ax.get_title() for ax in panels] == ["stickiness=1.0", "stickiness=0.5", "stickiness=0.2"]
+    # One y-axis, so that panels compare by eye; three seeds draw no bars and say so.
+    assert len({ax.get_ylim() for ax in panels}) == 1
+    assert "no CI" in fig._suptitle.get_text() and "No interval is drawn" in caption and "band" not in caption
     assert all(ax.get_legend() is None for ax in panels) and len(fig.legends) == 1
     # Lattice clusters get no off-lattice reference line.
     assert not any(line.get_linestyle() == "--" for ax in panels for line in ax.get_lines())
     fig = drawn(monkeypatch, _mass_radius, ds, tmp_path)
     assert len([ax for ax in fig.axes if ax.get_visible()]) == 3
+
+
+def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_path):
+    from dlasweep.report import _box_local_slopes, _diffusion_times
+
+    ds = synthetic_sweep({"jumps": [True, False]}, counts=(100, 200), seeds=2)
+    fig = drawn(monkeypatch, _box_local_slopes, ds, tmp_path)
+    (ax,) = [ax for ax in fig.axes if ax.get_visible()]
+    assert "Box-counting" in ax.get_title() and "box-counting" in ax.get_ylabel()
+    fig, caption = drawn(monkeypatch, _diffusion_times, ds, tmp_path, caption=True)
+    hist, depth = [ax for ax in fig.axes if ax.get_visible()]
+    assert "moves" in hist.get_xlabel() and "moves" in depth.get_ylabel()
+    # Jumps on and off count different moves: kept apart by line style and said in the caption.
+    assert [line.get_linestyle() for line in depth.get_lines()] == ["-", "--"]
+    assert "not on one time scale" in caption
+
+
+def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tmp_path):
+    from dlasweep.report import _anisotropy, _dimension_spread, _speed_accuracy
+
+    ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(200, 400), seeds=2)
+    for plot in (_anisotropy, _dimension_spread, _speed_accuracy):
+        fig, caption = drawn(monkeypatch, plot, ds, tmp_path, caption=True)
+        assert "95% CI" not in caption and "fewer than 10" in caption, (plot.__name__, caption)
+        assert not any("95% CI" in ax.get_ylabel() for ax in fig.axes if ax.get_visible()), plot.__name__
+
+
+def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
+    from dlasweep.analysis import MIN_CI_SEEDS
+
+    ds = synthetic_sweep({"stickiness": [1.0, 0.1]}, counts=(100, 300), seeds=MIN_CI_SEEDS)
+    sweep = Readout(ds)
+    ((low, high, value, half),) = sweep.differences(1)
+    one, two = sweep.row(low, 1), sweep.row(high, 1)
+    assert value == two["D"] - one["D"] and 0 < half < abs(value) + 1
+    assert half == pytest.approx(np.hypot(one["D_ci_hi"] - one["D_ci_lo"], two["D_ci_hi"] - two["D_ci_lo"]) / 2)
+    report(ds, tmp_path)
+    line = next(l for l in (tmp_path / "report.md").read_text().splitlines()
+                if l.startswith("- stickiness=0.1 against stickiness=1.0: "))
+    assert line.endswith("(resolved)") == (abs(value) > half) and ("|dev| <" in line) == (abs(value) <= half)
