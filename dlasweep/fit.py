@@ -20,11 +20,49 @@ reason) instead of returning a confident number.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from math import lgamma, log, pi
 
 import numpy as np
 
 Z95 = 1.959963984540054
 """Two-sided 95% quantile of the standard normal: every interval here is a 95% CI."""
+
+
+@lru_cache(maxsize=None)
+def t95(dof: int) -> float:
+    """Two-sided 95% quantile of Student's t with ``dof`` degrees of freedom (``Z95`` as ``dof`` grows).
+
+    Bisection on the distribution function, the density integrated by
+    Simpson's rule (to 1e-9; the package needs no scipy).
+    """
+    if dof < 1:
+        raise ValueError(f"dof: {dof} is below 1")
+    log_norm = lgamma((dof + 1) / 2) - lgamma(dof / 2) - 0.5 * log(dof * pi)
+
+    def mass(x):  # P(0 < T < x)
+        t = np.linspace(0.0, x, 4001)
+        f = np.exp(log_norm - (dof + 1) / 2 * np.log1p(t * t / dof))
+        return (t[1] / 3) * (f[0] + 4 * f[1:-1:2].sum() + 2 * f[2:-1:2].sum() + f[-1])
+
+    lo, hi = Z95, 13.0  # t95(1) = 12.706
+    while hi - lo > 1e-10:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if mass(mid) < 0.475 else (lo, mid)
+    return (lo + hi) / 2
+
+
+def seed_interval(estimate, replicates, n: int, axis=-1):
+    """The 95% CI over ``n`` seeds of ``estimate`` from its bootstrap ``replicates`` (along ``axis``).
+
+    ``estimate`` +- ``t95(n - 1)`` times the replicates' standard deviation
+    times sqrt(n / (n - 1)), which undoes the bootstrap's plug-in variance.
+    Percentile intervals of a bootstrap over tens of seeds are too narrow
+    (tests/test_analysis.py measures 79% at 4 seeds, 90% at 10); this one
+    holds 95% from 3 seeds on.
+    """
+    half = t95(n - 1) * np.std(replicates, axis=axis, ddof=1) * np.sqrt(n / (n - 1))
+    return estimate - half, estimate + half
 
 _OCTAVE = np.log(2.0)
 START_FRACTION = 0.05
@@ -80,7 +118,7 @@ class Ensemble:
     stderr : float
         ``std / sqrt(n)``.
     ci_lo, ci_hi : float
-        Percentile bootstrap 95% confidence interval of the mean.
+        95% confidence interval of the mean: ``mean`` +- ``t95(n - 1) * stderr``.
     n : int
         Number of finite values used.
     """
@@ -342,17 +380,14 @@ def fit_mass_radius(
                         min_points=min_points, flat_tolerance=flat_tolerance, unit="N")
 
 
-def ensemble(values, *, resamples: int = 4000, seed: int = 0) -> Ensemble:
-    """Mean, spread and bootstrap 95% confidence interval of values over seeds.
+def ensemble(values) -> Ensemble:
+    """Mean, spread and the 95% confidence interval of the mean (Student's t) of values over seeds.
 
     Parameters
     ----------
     values : array_like
         One value per seed; NaN entries are dropped (say so where it matters:
         dropping values selects).
-    resamples : int
-        Bootstrap resamples, drawn from ``numpy.random.default_rng(seed)`` so
-        that reruns agree.
 
     Returns
     -------
@@ -366,7 +401,6 @@ def ensemble(values, *, resamples: int = 4000, seed: int = 0) -> Ensemble:
         return Ensemble(np.nan, np.nan, np.nan, np.nan, np.nan, 0)
     if k == 1:
         return Ensemble(float(v[0]), np.nan, np.nan, np.nan, np.nan, 1)
-    std = float(v.std(ddof=1))
-    means = v[np.random.default_rng(seed).integers(0, k, (resamples, k))].mean(axis=1)
-    ci_lo, ci_hi = np.percentile(means, [2.5, 97.5])
-    return Ensemble(float(v.mean()), std, std / np.sqrt(k), float(ci_lo), float(ci_hi), k)
+    mean, std = float(v.mean()), float(v.std(ddof=1))
+    half = t95(k - 1) * std / np.sqrt(k)
+    return Ensemble(mean, std, std / np.sqrt(k), mean - half, mean + half, k)

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.stats import t as stats_t
 
-from dlasweep.fit import ensemble, fit_dimension, fit_mass_radius
+from dlasweep.fit import ensemble, fit_dimension, fit_mass_radius, seed_interval, t95
 from dlasweep.measure import box_counts, radius_of_gyration
 from known_sets import KNOWN
 
@@ -137,11 +138,24 @@ def test_ensemble_statistics_match_numpy_and_rerun_identically():
     assert stats.mean == pytest.approx(values.mean())
     assert stats.std == pytest.approx(values.std(ddof=1))
     assert stats.stderr == pytest.approx(values.std(ddof=1) / 4)
-    # The bootstrap interval of the mean is about mean +- 1.96 stderr.
-    assert stats.ci_lo < stats.mean < stats.ci_hi
-    assert (stats.ci_hi - stats.ci_lo) / (2 * 1.96 * stats.stderr) == pytest.approx(1, abs=0.15)
+    # Student's t interval of the mean, as scipy gives it.
+    lo, hi = stats_t.interval(0.95, 15, loc=values.mean(), scale=values.std(ddof=1) / 4)
+    assert (stats.ci_lo, stats.ci_hi) == pytest.approx((lo, hi), abs=1e-8)
     assert ensemble(values) == ensemble(values)
-    assert ensemble(values, seed=1) != ensemble(values)
+
+
+@pytest.mark.parametrize("dof", [1, 2, 3, 5, 9, 30, 1000])
+def test_t_quantile_matches_scipy(dof):
+    assert t95(dof) == pytest.approx(stats_t.ppf(0.975, dof), abs=1e-8)
+
+
+def test_seed_interval_covers_a_mean_as_the_t_interval_does():
+    # The bootstrap of a mean over n values spreads by std/sqrt(n) * sqrt((n-1)/n):
+    # the interval from it is Student's, to the bootstrap's own noise.
+    values = np.random.default_rng(5).normal(1.7, 0.05, 6)
+    means = values[np.random.default_rng(6).integers(0, 6, (20000, 6))].mean(axis=1)
+    lo, hi = seed_interval(values.mean(), means, 6)
+    assert (lo, hi) == pytest.approx((ensemble(values).ci_lo, ensemble(values).ci_hi), abs=0.003)
 
 
 def test_ensemble_of_too_few_values_gives_nan_not_numbers():

@@ -13,7 +13,7 @@ import xarray as xr
 import dlasweep as dla
 from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
 from dlasweep import store
-from dlasweep.analysis import Readout
+from dlasweep.analysis import MIN_CI_SEEDS, Readout
 from dlasweep.params import STATUSES
 from dlasweep.report import report
 
@@ -91,17 +91,23 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     assert {r["stickiness"] for r in rows} == {"1.0", "0.5"}
     assert all(r["seeds"] == "3" and r["status"] == "ok:3" for r in rows)
     big = [r for r in rows if r["n_particles"] == "800"]
-    # Three seeds give D and no interval, and say why.
+    # Three seeds give D and its interval.
+    assert all(float(r["D_ci_lo"]) < float(r["D"]) < float(r["D_ci_hi"]) and r["D_ci_reason"] == "" for r in big)
+    rows = list(csv.DictReader(open(report(synthetic_sweep({"stickiness": [1.0, 0.5]}, seeds=2),
+                                           tmp_path / "two")[0].parent / "summary.csv")))
+    big = [r for r in rows if r["n_particles"] == "800"]
+    # Two seeds give D and no interval, and say why.
     assert all(1.3 < float(r["D"]) < 2.1 and r["D_ci_lo"] == "nan" and "fewer than the" in r["D_ci_reason"]
                for r in big)
+    two = (tmp_path / "two" / "report.md").read_text()
+    assert "no CI: 2 < 3 clusters" in two and "cannot say whether resolved" in two
     text = (tmp_path / "out" / "report.md").read_text()
     for name in names - {"report.md", "summary.csv", "summary.md"}:
         assert f"({name})" in text
     assert "speed_accuracy" not in text and "reads low" in text and "1.7100(3)" in text
     assert text.count("95% confidence interval") == 1
-    assert "no CI: 3 < 10 clusters" in text
     # Whether the difference between the two configurations is resolved, said, not left to the reader.
-    assert "- stickiness=0.5 against stickiness=1.0: " in text and "cannot say whether resolved" in text
+    assert "- stickiness=0.5 against stickiness=1.0: " in text and "cannot say whether resolved" not in text
 
 
 def test_report_tells_its_progress_step_by_step(tmp_path):
@@ -241,17 +247,17 @@ def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch,
     assert all(len(ax.containers) == 2 and not ax.texts for ax in panels)  # one series per scene
     assert "numbers" not in fig._suptitle.get_text()
     assert "band" not in caption and "bias" not in caption and "bars" not in caption
-    assert "no CI: fewer than 10 seeds" in caption and "one colour per scene" in caption
+    assert f"no CI: fewer than {MIN_CI_SEEDS} seeds" in caption and "one colour per scene" in caption
 
 
 def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_path):
     from dlasweep.report import _dimension_vs_n, _mass_radius
 
-    ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=3)
+    ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=MIN_CI_SEEDS - 1)
     fig, caption = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path, caption=True)
     panels = [ax for ax in fig.axes if ax.get_visible()]
     assert [ax.get_title() for ax in panels] == ["stickiness=1.0", "stickiness=0.5", "stickiness=0.2"]
-    # One y-axis, so that panels compare by eye; three seeds draw no bars and say so.
+    # One y-axis, so that panels compare by eye; too few seeds draw no bars and say so.
     assert len({ax.get_ylim() for ax in panels}) == 1
     assert "no CI" in fig._suptitle.get_text() and "No interval is drawn" in caption and "band" not in caption
     assert all(ax.get_legend() is None for ax in panels) and len(fig.legends) == 1
@@ -282,12 +288,11 @@ def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tm
     ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(200, 400), seeds=2)
     for plot in (_anisotropy, _dimension_spread, _speed_accuracy):
         fig, caption = drawn(monkeypatch, plot, ds, tmp_path, caption=True)
-        assert "95% CI" not in caption and "fewer than 10" in caption, (plot.__name__, caption)
+        assert "95% CI" not in caption and f"fewer than {MIN_CI_SEEDS}" in caption, (plot.__name__, caption)
         assert not any("95% CI" in ax.get_ylabel() for ax in fig.axes if ax.get_visible()), plot.__name__
 
 
 def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
-    from dlasweep.analysis import MIN_CI_SEEDS
 
     ds = synthetic_sweep({"stickiness": [1.0, 0.1]}, counts=(100, 300), seeds=MIN_CI_SEEDS)
     sweep = Readout(ds)
