@@ -30,7 +30,7 @@ from .grow import compiled, grow
 from .measure import radius_of_gyration
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
 from .report import plot_bench, report
-from .spec import MAX_PARTICLES, SpecError, load_spec
+from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
 from .sweep import ResumeError, run_sweep
 
@@ -125,7 +125,7 @@ def _parser() -> argparse.ArgumentParser:
     where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
-    many.add_argument("--workers", type=int, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
+    many.add_argument("--workers", type=_params.integer, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
     many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
     many.set_defaults(handler=_sweep)
 
@@ -167,8 +167,8 @@ def _grow(args) -> int:
     _check_writable(out)
     if not 1 <= args.n <= MAX_PARTICLES:
         raise UsageError(f"-n: {args.n} is not in [1, {MAX_PARTICLES}]")
-    if args.seed < 0:
-        raise UsageError(f"--seed: {args.seed} is negative")
+    if not 0 <= args.seed <= _params.MAX_SEED:
+        raise UsageError(f"--seed: {args.seed} is not in [0, {_params.MAX_SEED}]")
     try:
         given = {k: _params.coerce(k, getattr(args, k))
                  for k in _params.DEFAULTS if getattr(args, k) is not None}
@@ -240,8 +240,8 @@ def _sweep(args) -> int:
         raise UsageError(f"-o {out}: expected a file ending in .nc")
     _check_writable(out)
     if args.workers is not None:
-        if args.workers < 1:
-            raise UsageError(f"--workers: {args.workers} is below 1")
+        if not 1 <= args.workers <= MAX_WORKERS:
+            raise UsageError(f"--workers: {args.workers} is not in [1, {MAX_WORKERS}]")
         if args.scheduler or args.scheduler_file:
             raise UsageError("--workers: applies to the embedded cluster only, not with --scheduler")
     if args.scheduler_file and not args.scheduler_file.is_file():
