@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from . import params as _params
+from . import plan as _plan
 from . import store
 from ._version import __version__
 from .analysis import summarise
@@ -32,7 +33,7 @@ from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw
 from .report import plot_bench, report
 from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
-from .sweep import ResumeError, run_sweep
+from .sweep import ResumeError, embedded_threads, run_sweep, scheduler_address
 
 GROW_SUFFIXES = (".nc", ".png", ".svg")
 
@@ -246,6 +247,16 @@ def _sweep(args) -> int:
             raise UsageError("--workers: applies to the embedded cluster only, not with --scheduler")
     if args.scheduler_file and not args.scheduler_file.is_file():
         raise UsageError(f"--scheduler-file {args.scheduler_file}: no such file")
+    if args.scheduler is not None or args.scheduler_file:
+        try:
+            scheduler_address(args.scheduler, args.scheduler_file)
+        except ValueError as err:
+            option = f"--scheduler-file {args.scheduler_file}" if args.scheduler_file else "--scheduler"
+            raise UsageError(f"{option}: {err}") from None
+    local = not (args.scheduler or args.scheduler_file)
+    plan = _plan.plan(spec, embedded_threads(args.workers or spec.workers, spec.n_tasks) if local else 1)
+    _plan.check(plan, spec, _plan.room(out.parent), local=local)
+    _say(f"dlasweep sweep: {plan}")
 
     start = time.perf_counter()
     with warnings.catch_warnings():

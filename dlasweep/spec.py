@@ -151,6 +151,12 @@ class Spec:
         """Every configuration's parameters (``params.resolve``), in C order: resolved once per spec."""
         return [_params.resolve(**self.fixed, **config) for config in self.configurations()]
 
+    @property
+    def parameters(self) -> list:
+        """Every configuration's parameters, resolved (``params.resolve``), in C order: a dict per grid point,
+        seeds aside."""
+        return self._resolved
+
     def stores(self, task: Task) -> bool:
         """Whether the positions of ``task``'s cluster are stored (``[run] store_clusters``)."""
         return self.store_clusters is None or task.index[-1] < self.store_clusters

@@ -650,11 +650,10 @@ def _connected(client, scheduler_file, workers, n_tasks, load):
         yield client
         return
     if client is not None or scheduler_file is not None:
-        kwargs = {"scheduler_file": str(scheduler_file)} if scheduler_file else {"address": client}
-        with Client(**kwargs) as connected:
+        with Client(scheduler_address(client, scheduler_file)) as connected:
             yield connected
         return
-    threads = min(workers or _usable_cores(), n_tasks)
+    threads = embedded_threads(workers, n_tasks)
     # The kernels release the GIL, so one in-process worker with a thread per
     # core runs them in parallel, starts in milliseconds instead of a second
     # per spawned process, and loads the compiled kernels once, not per process.
@@ -675,6 +674,43 @@ def _connected(client, scheduler_file, workers, n_tasks, load):
             yield embedded
     finally:
         sys.setswitchinterval(interval)
+
+
+def scheduler_address(address=None, scheduler_file=None) -> str:
+    """A scheduler's address, as given or read from its scheduler file, checked for its form (not reached).
+
+    Raises
+    ------
+    ValueError
+        One line: what is wrong with the address or the file (the caller names the option).
+    """
+    from distributed.comm.addressing import parse_address, parse_host_port
+    from distributed.comm.registry import backends
+
+    if scheduler_file is not None:
+        try:
+            info = json.loads(Path(scheduler_file).read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError) as err:
+            raise ValueError(f"not a dask scheduler file ({type(err).__name__}: {err})") from None
+        address = info.get("address") if isinstance(info, dict) else None
+        if not isinstance(address, str):
+            raise ValueError('not a dask scheduler file (no "address" string)')
+    try:
+        scheme, location = parse_address(address)
+        if scheme not in backends:
+            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(backends)})")
+        if scheme in ("tcp", "tls"):
+            host, port = parse_host_port(location)
+            if not host or not 0 < port < 65536:
+                raise ValueError("expected HOST:PORT, the port in [1, 65535]")
+    except (ValueError, TypeError) as err:
+        raise ValueError(f"{address!r} is not a scheduler address ({err})") from None
+    return address
+
+
+def embedded_threads(workers, n_tasks) -> int:
+    """Threads of the embedded cluster: ``workers`` (default: the usable cores), at most one a task."""
+    return min(workers or _usable_cores(), n_tasks)
 
 
 def _usable_cores() -> int:
