@@ -256,14 +256,13 @@ def _sweep(args) -> int:
     local = not (args.scheduler or args.scheduler_file)
     plan = _plan.plan(spec, embedded_threads(args.workers or spec.workers, spec.n_tasks) if local else 1)
     _plan.check(plan, spec, _plan.room(out.parent), local=local)
-    _say(f"dlasweep sweep: {plan}")
 
     start = time.perf_counter()
     with warnings.catch_warnings():
         # Failed tasks are reported below, once.
         warnings.simplefilter("ignore", RuntimeWarning)
-        ds = run_sweep(spec, client=args.scheduler, out=out, resume=args.resume,
-                       workers=args.workers, scheduler_file=args.scheduler_file)
+        ds = run_sweep(spec, client=args.scheduler, out=out, resume=args.resume, workers=args.workers,
+                       scheduler_file=args.scheduler_file, announce=f"dlasweep sweep: {plan}")
     failed = ds.attrs.get("failed_tasks")
     ds.close()
     if failed:

@@ -93,7 +93,7 @@ class ResumeError(ValueError):
 
 
 def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
-              scheduler_file=None):
+              scheduler_file=None, announce=None):
     """Grow and measure every cluster of a spec.
 
     Parameters
@@ -115,6 +115,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         Show a progress bar (default: when stderr is a terminal).
     scheduler_file : path, optional
         Connect to the scheduler described in this file.
+    announce : str, optional
+        A line for stderr once the first task is about to run (connected):
+        the plan (``plan.Plan``).
 
     Returns
     -------
@@ -149,6 +152,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                         print(f"{spec.name}: compiling kernels (once)", file=sys.stderr)
                     dask_client = session.enter_context(_connected(client, scheduler_file, workers or spec.workers, most,
                                                                    functools.partial(_load_kernels, spec)))
+                    if announce:
+                        print(announce, file=sys.stderr, flush=True)
                     session.enter_context(_collector_eased())
                 bar = tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
                            desc=spec.name, disable=not progress, file=sys.stderr)
