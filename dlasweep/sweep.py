@@ -702,8 +702,9 @@ def scheduler_address(address=None, scheduler_file=None) -> str:
             raise ValueError('not a dask scheduler file (no "address" string)')
     try:
         scheme, location = parse_address(address)
-        if scheme not in backends:
-            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(backends)})")
+        remote = [name for name in backends if name != "inproc"]  # inproc: an address inside one process
+        if scheme not in remote:
+            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(remote)})")
         if scheme in ("tcp", "tls"):
             host, port = parse_host_port(location)
             if not host or not 0 < port < 65536:

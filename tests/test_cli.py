@@ -54,6 +54,7 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["sweep", "spec.toml", "--scheduler-file", "absent.json"], "--scheduler-file"),
     (["sweep", "spec.toml", "--scheduler", "notanaddress"], "--scheduler: 'notanaddress' is not a scheduler address"),
     (["sweep", "spec.toml", "--scheduler", "tcp://host:99999"], "--scheduler: 'tcp://host:99999' is not"),
+    (["sweep", "spec.toml", "--scheduler", "inproc://x"], "--scheduler: 'inproc://x' is not a scheduler address"),
     (["sweep", "spec.toml", "--scheduler-file", "empty.json"], "--scheduler-file empty.json: not a dask scheduler"),
     (["sweep", "spec.toml", "--scheduler-file", "garbage.json"], "--scheduler-file garbage.json: not a dask"),
     (["sweep", "spec.toml", "--workers", "1e6"], "--workers: 1000000 is not in [1, 1024]"),
@@ -106,7 +107,7 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
         assert f"--{name.replace('_', '-')}" in text and " ".join(param.meaning.split()) in text, name
     for name, values in {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}.items():
         assert f"--{name.replace('_', '-')} {{{values}}}" in text
-    assert "Default: 2*dim." in text and "Allowed: (0, 1]." in text
+    assert "Default: 2*dim." in text and "Allowed: [0.0001, 1]." in text
 
 
 @pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
