@@ -126,7 +126,8 @@ def _parser() -> argparse.ArgumentParser:
     where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
-    many.add_argument("--workers", type=_params.integer, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
+    many.add_argument("--workers", type=_params.integer, metavar="K",
+                      help="threads of the embedded dask cluster (tasks at once)")
     many.add_argument("--resume", action="store_true", help="continue an interrupted run of this spec")
     many.set_defaults(handler=_sweep)
 
@@ -254,7 +255,7 @@ def _sweep(args) -> int:
             option = f"--scheduler-file {args.scheduler_file}" if args.scheduler_file else "--scheduler"
             raise UsageError(f"{option}: {err}") from None
     local = not (args.scheduler or args.scheduler_file)
-    plan = _plan.plan(spec, embedded_threads(args.workers or spec.workers, spec.n_tasks) if local else 1)
+    plan = _plan.plan(spec, embedded_threads(args.workers or spec.workers) if local else 1)
     _plan.check(plan, spec, _plan.room(out.parent), local=local)
 
     start = time.perf_counter()

@@ -75,7 +75,7 @@ class Plan:
 
 
 def plan(spec: Spec, threads: int) -> Plan:
-    """The plan of ``spec`` grown ``threads`` clusters at a time.
+    """The plan of ``spec`` grown ``threads`` clusters at a time (at most: no more than it has).
 
     A target sweep is planned at its ``max_seeds``, the most it may grow.
     """

@@ -714,9 +714,9 @@ def scheduler_address(address=None, scheduler_file=None) -> str:
     return address
 
 
-def embedded_threads(workers, n_tasks) -> int:
+def embedded_threads(workers, n_tasks=None) -> int:
     """Threads of the embedded cluster: ``workers`` (default: the usable cores), at most one a task."""
-    return min(workers or _usable_cores(), n_tasks)
+    return min(workers or _usable_cores(), n_tasks or math.inf)
 
 
 def _usable_cores() -> int:
