@@ -702,13 +702,18 @@ def scheduler_address(address=None, scheduler_file=None) -> str:
             raise ValueError('not a dask scheduler file (no "address" string)')
     try:
         scheme, location = parse_address(address)
-        remote = [name for name in backends if name != "inproc"]  # inproc: an address inside one process
-        if scheme not in remote:
-            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(remote)})")
+        if scheme not in backends:
+            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(backends)})")
         if scheme in ("tcp", "tls"):
             host, port = parse_host_port(location)
             if not host or not 0 < port < 65536:
                 raise ValueError("expected HOST:PORT, the port in [1, 65535]")
+        if scheme == "inproc":  # a scheduler in this process (an embedding program's, a test's)
+            fields = location.split("/")
+            if len(fields) != 3 or not fields[1].isdigit():
+                raise ValueError("expected inproc://HOST/PID/N")
+            if int(fields[1]) != os.getpid():
+                raise ValueError(f"names a scheduler inside process {fields[1]}, not this one")
     except (ValueError, TypeError) as err:
         raise ValueError(f"{address!r} is not a scheduler address ({err})") from None
     return address

@@ -55,6 +55,7 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["sweep", "spec.toml", "--scheduler", "notanaddress"], "--scheduler: 'notanaddress' is not a scheduler address"),
     (["sweep", "spec.toml", "--scheduler", "tcp://host:99999"], "--scheduler: 'tcp://host:99999' is not"),
     (["sweep", "spec.toml", "--scheduler", "inproc://x"], "--scheduler: 'inproc://x' is not a scheduler address"),
+    (["sweep", "spec.toml", "--scheduler", "inproc://h/1/1"], "names a scheduler inside process 1, not this one"),
     (["sweep", "spec.toml", "--scheduler-file", "empty.json"], "--scheduler-file empty.json: not a dask scheduler"),
     (["sweep", "spec.toml", "--scheduler-file", "garbage.json"], "--scheduler-file garbage.json: not a dask"),
     (["sweep", "spec.toml", "--workers", "1e6"], "--workers: 1000000 is not in [1, 1024]"),
