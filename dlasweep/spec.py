@@ -309,8 +309,8 @@ def _typed(key, value):
 
 
 def _check_tasks(spec):
-    """Refuse a grid of more than ``MAX_TASKS`` clusters (a target sweep's at its max_seeds), naming its largest
-    factor."""
+    """Refuse a grid of more than ``MAX_TASKS`` clusters (a target sweep's at its max_seeds), naming the key of
+    its seeds."""
     n = spec.n_tasks if spec.max_seeds is None else spec.n_tasks // len(spec.seeds) * spec.max_seeds
     if n > MAX_TASKS:
         key = "run.max_seeds" if spec.max_seeds is not None else "grid.seeds"
@@ -360,9 +360,8 @@ def _integer(key, value, low, high):
         number = _params.integer(value)
     except ValueError as err:
         raise SpecError(f"{key}: {err}") from None
-    if number < low or (high is not None and number > high):
-        bound = f">= {low}" if high is None else f"in [{low}, {high}]"
-        raise SpecError(f"{key}: {_params.text(value)} is not {bound}")
+    if not low <= number <= high:
+        raise SpecError(f"{key}: {_params.text(value)} is not in [{low}, {high}]")
     return number
 
 
