@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from . import params as _params
+from . import plan as _plan
 from . import slurm, store
 from ._version import __version__
 from .analysis import summarise
@@ -32,9 +33,9 @@ from .grow import compiled, grow
 from .measure import radius_of_gyration
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
 from .report import ReportFolderError, earlier_report, plot_bench, report
-from .spec import MAX_PARTICLES, SpecError, load_spec
+from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
-from .sweep import Interrupted, ResumeError, run_sweep
+from .sweep import Interrupted, ResumeError, embedded_threads, run_sweep, scheduler_address
 
 GROW_SUFFIXES = (".nc", ".png", ".svg")
 
@@ -128,7 +129,8 @@ def _parser() -> argparse.ArgumentParser:
     where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
-    many.add_argument("--workers", type=int, metavar="K", help="threads of the embedded dask cluster (tasks at once)")
+    many.add_argument("--workers", type=_params.integer, metavar="K",
+                      help="threads of the embedded dask cluster (tasks at once)")
     many.add_argument("--resume", action="store_true",
                       help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists")
     many.add_argument("--force", action="store_true", help="replace OUT if it exists")
@@ -176,8 +178,8 @@ def _grow(args) -> int:
     _check_new(out, args.force)
     if not 1 <= args.n <= MAX_PARTICLES:
         raise UsageError(f"-n: {args.n} is not in [1, {MAX_PARTICLES}]")
-    if args.seed < 0:
-        raise UsageError(f"--seed: {args.seed} is negative")
+    if not 0 <= args.seed <= _params.MAX_SEED:
+        raise UsageError(f"--seed: {args.seed} is not in [0, {_params.MAX_SEED}]")
     try:
         given = {k: _params.coerce(k, getattr(args, k))
                  for k in _params.DEFAULTS if getattr(args, k) is not None}
@@ -258,19 +260,28 @@ def _sweep_target(args) -> tuple:
 def _sweep(args) -> int:
     spec, out = _sweep_target(args)
     if args.workers is not None:
-        if args.workers < 1:
-            raise UsageError(f"--workers: {args.workers} is below 1")
+        if not 1 <= args.workers <= MAX_WORKERS:
+            raise UsageError(f"--workers: {args.workers} is not in [1, {MAX_WORKERS}]")
         if args.scheduler or args.scheduler_file:
             raise UsageError("--workers: applies to the embedded cluster only, not with --scheduler")
     if args.scheduler_file and not args.scheduler_file.is_file():
         raise UsageError(f"--scheduler-file {args.scheduler_file}: no such file")
+    if args.scheduler is not None or args.scheduler_file:
+        try:
+            scheduler_address(args.scheduler, args.scheduler_file)
+        except ValueError as err:
+            option = f"--scheduler-file {args.scheduler_file}" if args.scheduler_file else "--scheduler"
+            raise UsageError(f"{option}: {err}") from None
+    local = not (args.scheduler or args.scheduler_file)
+    plan = _plan.plan(spec, embedded_threads(args.workers or spec.workers) if local else 1)
+    _plan.check(plan, spec, _plan.room(out.parent), local=local)
 
     start = time.perf_counter()
     with warnings.catch_warnings():
         # Failed tasks are reported below, once.
         warnings.simplefilter("ignore", RuntimeWarning)
-        ds = run_sweep(spec, client=args.scheduler, out=out, resume=args.resume,
-                       workers=args.workers, scheduler_file=args.scheduler_file)
+        ds = run_sweep(spec, client=args.scheduler, out=out, resume=args.resume, workers=args.workers,
+                       scheduler_file=args.scheduler_file, announce=f"dlasweep sweep: {plan}")
     failed = ds.attrs.get("failed_tasks")
     ds.close()
     if failed:

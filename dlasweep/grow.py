@@ -104,21 +104,24 @@ def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluste
         Counts at which to record elapsed time (default: ``[n]``).
     progress : callable, optional
         Called as ``progress(particles, seconds)`` every ``WATCH_SECONDS``
-        while the cluster grows (in another thread, which the compiled
-        kernel leaves free), and once at the end; the cluster is the same.
+        while the cluster grows, and once at the end; the cluster is the same.
     **params
         Model parameters (see ``dlasweep.params.DEFAULTS``).
 
     Returns
     -------
     Cluster
+
+    Notes
+    -----
+    The kernel runs in another thread (it releases the GIL) while this one
+    waits for it, so that Ctrl-C (``KeyboardInterrupt``) reaches the caller at
+    once, not when growth ends. The interrupted kernel is not stopped: the
+    ``dlasweep`` command exits, which ends it; in a Python session it
+    finishes in the background.
     """
     p, marks = _checked(n, checkpoints, params)
-    rng = rng_for(seed)
-    if progress is None:
-        [result] = KERNELS[p["model"]](int(n), p, marks, [rng])
-    else:
-        result = _watched(KERNELS[p["model"]], int(n), p, marks, rng, progress)
+    result = _watched(KERNELS[p["model"]], int(n), p, marks, rng_for(seed), progress)
     return _cluster(result, p, marks)
 
 
@@ -154,12 +157,14 @@ def _cluster(result, p, marks):
     return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds)
 
 
-def _watched(kernel, n, p, marks, rng, progress):
-    """``kernel(n, p, marks, [rng])`` run in a thread, the counts it passes reported to ``progress``.
+def _watched(kernel, n, p, marks, rng, progress=None):
+    """``kernel(n, p, marks, [rng])`` run in a thread while this one waits, interruptible; the counts it
+    passes reported to ``progress`` (when given).
 
     Growth does not depend on the marks (they only read a clock), so more
     marks are passed, every n / ``WATCH_MARKS``, and the times it fills are
-    read as it goes.
+    read as it goes. Watching costs nothing measurable: a 10^6 lattice
+    cluster grew in the same time watched as called directly.
     """
     watch = np.union1d(marks, np.linspace(0, n, WATCH_MARKS + 1)[1:].astype(np.int64)).astype(np.int64)
     times = np.full((1, len(watch)), np.nan)
@@ -174,12 +179,15 @@ def _watched(kernel, n, p, marks, rng, progress):
     start = time.perf_counter()
     worker = threading.Thread(target=run, name="dlasweep-grow", daemon=True)
     worker.start()
+    # Python runs a signal's handler here, between joins, never inside the compiled kernel.
     while worker.is_alive():
         worker.join(WATCH_SECONDS)
-        passed = np.flatnonzero(~np.isnan(times[0]))
-        progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
+        if progress is not None:
+            passed = np.flatnonzero(~np.isnan(times[0]))
+            progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
     if isinstance(result[0], BaseException):
         raise result[0]
     points, steps, code, _, seconds = result[0]
-    progress(len(points), time.perf_counter() - start)
+    if progress is not None:
+        progress(len(points), time.perf_counter() - start)
     return points, steps, code, times[0, np.isin(watch, marks)], seconds

@@ -7,6 +7,7 @@ raises ``ValueError`` naming the offending parameter.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import numbers
@@ -78,11 +79,36 @@ class Parameter:
 
 MIN_SIZE = 8
 """Smallest box side to grow in."""
+MAX_SIZE = 100_000
+"""Largest box side: wider than any cluster of ``spec.MAX_PARTICLES`` (about 5e4 across in 2D); a box
+launch releases walkers on its walls, and at 1e5 the first 200 particles took 39 s."""
+MAX_STEP = 100.0
+"""Largest Gaussian step (particle diameters). A step far longer than the cluster jumps over it: a walker
+returned to the launch circle hits with a chance of about 1 / step**2 per step (200 particles: 1.5 s at 100,
+18 s at 1000; at 1e9, never)."""
+MIN_STICKINESS = 1e-4
+"""Smallest stickiness: a particle takes about 1/stickiness contacts to stick (200 off-lattice particles:
+5 s at 1e-4; at 1e-6 over a minute; at 1e-300, never)."""
+MAX_RADIUS_FACTOR = 100.0
+"""Largest launch_factor, launch_margin and kill_factor: farther launch and kill circles give the same
+clusters (the return to the launch circle is exact) more slowly, and at 1e200 the walk's squared radii
+overflow to inf and it never ends."""
+MAX_WALKERS = 1_000_000
+"""Most lockstep walkers (their positions: 24 MB)."""
+MAX_COUNT = 2 ** 62
+"""Largest step budget: the kernels count steps in int64."""
+MAX_SEED = 2 ** 63 - 1
+"""Largest seed (a cluster's, a sweep's root): datasets store it as int64."""
 
 
 def _below(low, shown, why=""):
     """A check: a value below ``low`` (written ``shown``) is refused, with ``why``."""
     return lambda v, p, given: f"{v} is below {shown}{why}" if v < low else None
+
+
+def _above(high, shown, why=""):
+    """A check: a value above ``high`` (written ``shown``) is refused, with ``why``."""
+    return lambda v, p, given: f"{v} is above {shown}{why}" if v > high else None
 
 
 def _negative(v, p, given):
@@ -99,8 +125,10 @@ PARAMETERS = {
                                                "disks/spheres in continuous space", units=None),
     "dim": Parameter(int, 2, (2, 3), "dimension of space",
                      checks=(lambda d, p, given: None if d in (2, 3) else f"{d} is not 2 or 3",)),
-    "stickiness": Parameter(float, 1.0, "(0, 1]", "probability to stick at each contact",
-                            checks=(lambda s, p, given: None if 0.0 < s <= 1.0 else f"{s} is not in (0, 1]",)),
+    "stickiness": Parameter(float, 1.0, f"[{MIN_STICKINESS:g}, 1]", "probability to stick at each contact",
+                            checks=(lambda s, p, given: None if MIN_STICKINESS <= s <= 1.0
+                                    else f"{s} is not in [{MIN_STICKINESS:g}, 1] (about 1/stickiness contacts a "
+                                         f"particle)",)),
     "neighbours": Parameter(
         int, 0, "2*dim or 3**dim-1", "lattice moves and contacts: nearest or Moore neighbours", shown="2*dim",
         fill=_neighbourhood,
@@ -114,40 +142,49 @@ PARAMETERS = {
         note="the substrate is not counted in the points",
         checks=(lambda v, p, given: "'line' needs size > 0 (the substrate's periodic width)"
                 if v == "line" and p["size"] == 0 else None,)),
-    "size": Parameter(int, 0, f"0 or an integer >= {MIN_SIZE}", "box side in lattice spacings (particle diameters "
-                                                                "off the lattice), 0 = unbounded",
+    "size": Parameter(int, 0, f"0 or an integer in [{MIN_SIZE}, {MAX_SIZE}]",
+                      "box side in lattice spacings (particle diameters off the lattice), 0 = unbounded",
                       checks=(_negative, lambda v, p, given: f"{v} is below {MIN_SIZE}, too small to grow in"
-                              if 0 < v < MIN_SIZE else None)),
+                              if 0 < v < MIN_SIZE else None, _above(MAX_SIZE, MAX_SIZE))),
     "launch": Parameter(str, "circle", LAUNCHES, "release on a circle/sphere of radius launch_factor*r_max + "
                                                  "launch_margin, or uniformly on the box surface (needs size > 0)",
                         units=None,
                         checks=(lambda v, p, given: "'box' needs size > 0" if v == "box" and p["size"] == 0
                                 else None,)),
-    "launch_factor": Parameter(float, 1.0, ">= 1", "launch radius over the cluster's largest radius r_max",
-                               checks=(_below(1.0, "1", " (the launch circle must enclose the cluster)"),)),
-    "launch_margin": Parameter(float, 2.0, ">= 1", "launch radius beyond launch_factor*r_max",
-                               checks=(_below(1.0, "1"),)),
+    "launch_factor": Parameter(float, 1.0, f"[1, {MAX_RADIUS_FACTOR:g}]",
+                               "launch radius over the cluster's largest radius r_max",
+                               checks=(_below(1.0, "1", " (the launch circle must enclose the cluster)"),
+                                       _above(MAX_RADIUS_FACTOR, f"{MAX_RADIUS_FACTOR:g}"))),
+    "launch_margin": Parameter(float, 2.0, f"[1, {MAX_RADIUS_FACTOR:g}]", "launch radius beyond launch_factor*r_max",
+                               checks=(_below(1.0, "1"), _above(MAX_RADIUS_FACTOR, f"{MAX_RADIUS_FACTOR:g}"))),
     "kill_factor": Parameter(
-        float, 0.0, "0 or > 1", "kill radius over the launch radius; 0 = exact return to the launch circle, none "
-                                "killed",
+        float, 0.0, f"0 or in (1, {MAX_RADIUS_FACTOR:g}]",
+        "kill radius over the launch radius; 0 = exact return to the launch circle, none killed",
         note="the exact return draws from the Poisson kernel (2D) or escapes with probability 1-R/r (3D); > 1: "
              "killed and relaunched beyond kill_factor * launch radius",
         checks=(lambda kf, p, given: f"{kf} must be 0 (exact return) or > 1" if kf != 0.0 and kf <= 1.0 else None,
+                _above(MAX_RADIUS_FACTOR, f"{MAX_RADIUS_FACTOR:g}"),
                 lambda kf, p, given: "a kill circle needs launch='circle' (box launches start outside it)"
                 if kf != 0.0 and p["launch"] == "box" else None)),
     "jumps": Parameter(bool, True, "true or false", "exact first-passage jumps far from the cluster (true), or "
                                                     "single steps everywhere (false)"),
-    "step": Parameter(float, 0.0, "0 or > 0", "off-lattice step: 0 = move to exact contact, > 0 = standard "
-                                              "deviation of fixed Gaussian steps with overlap checks (can tunnel)",
-                      checks=(_negative, lambda st, p, given: "a step length applies only to model='offlattice'"
+    "step": Parameter(float, 0.0, f"0 or in (0, {MAX_STEP:g}]",
+                      "off-lattice step: 0 = move to exact contact, > 0 = standard deviation of fixed Gaussian steps "
+                      "with overlap checks (can tunnel)",
+                      checks=(_negative, _above(MAX_STEP, f"{MAX_STEP:g}",
+                                                " diameters (a step far longer than the cluster jumps over it)"),
+                              lambda st, p, given: "a step length applies only to model='offlattice'"
                               if st > 0.0 and p["model"] == "lattice" else None)),
-    "walkers": Parameter(int, 1, "an integer >= 1", "walkers at once; more than 1 start uniformly in the box and "
-                                                    "move in lockstep, none relaunched",
+    "walkers": Parameter(int, 1, f"an integer in [1, {MAX_WALKERS}]",
+                         "walkers at once; more than 1 start uniformly in the box and move in lockstep, none "
+                         "relaunched",
                          note="lockstep walkers take single steps",
-                         checks=(_below(1, "1"), lambda w, p, given: "more than one walker needs size > 0 (they "
-                                 "start uniformly in the box)" if w > 1 and p["size"] == 0 else None)),
-    "max_steps": Parameter(int, 0, "an integer >= 0", "walk-step budget per cluster (0 = none); growth stops with "
-                                                      "status step_limit when it runs out", checks=(_negative,)),
+                         checks=(_below(1, "1"), _above(MAX_WALKERS, MAX_WALKERS),
+                                 lambda w, p, given: "more than one walker needs size > 0 (they start uniformly in the "
+                                 "box)" if w > 1 and p["size"] == 0 else None)),
+    "max_steps": Parameter(int, 0, "an integer in [0, 2**62]", "walk-step budget per cluster (0 = none); growth "
+                                                               "stops with status step_limit when it runs out",
+                           checks=(_negative, _above(MAX_COUNT, "2**62"))),
 }
 """Every model parameter a cluster depends on (README, "The model"), once: its type,
 default, allowed values, checks, meaning and units. ``resolve``, ``coerce``, the
@@ -165,9 +202,12 @@ def _kind(name, value, kind):
             return value
         raise ValueError(f"{name}: expected true or false, got {value!r}")
     if kind is int:
-        if not is_integer(value):
-            raise ValueError(f"{name}: expected an integer, got {value!r}")
-        return int(value)
+        try:
+            if isinstance(value, str):  # a spec's "5": text is the command line's to parse
+                raise ValueError(f"expected an integer, got {value!r}")
+            return integer(value)
+        except ValueError as err:
+            raise ValueError(f"{name}: {err}") from None
     if kind is float:
         if not is_number(value):
             raise ValueError(f"{name}: expected a number, got {value!r}")
@@ -296,28 +336,35 @@ def coerce(name: str, text: str):
     return text
 
 
-_INTEGER_DIGITS = 30
-"""Longest integer ``integer`` expands from exponent notation (far beyond any count)."""
+_INTEGER_DIGITS = 400
+"""Longest integer ``integer`` expands from exponent notation: longer than any finite float (309 digits), so
+that every number a spec holds gets its range checked, yet int() never expands a text like 1e999999999."""
 
 
-def integer(text: str) -> int:
-    """Parse an integer written as digits or as an integral number: ``1e5``, ``1.5e3``.
+def integer(value) -> int:
+    """An integer, written as digits or as an integral number: ``1e5``, ``1.5e3``, ``100000.0``.
+
+    The one rule for every integer a user gives: command-line text, or a
+    number from a spec (TOML reads ``1e5`` as a float). Its range is the
+    caller's to check, so that ``1e20`` gets the range, not this message.
 
     Raises
     ------
     ValueError
-        For anything else (``2.5``, ``1e5.5``, ``nan``); the caller names
-        the option.
+        For anything else (``2.5``, ``1e5.5``, ``nan``, ``true``, a list, a
+        string in a spec); the caller names the key or option.
     """
+    if is_integer(value):
+        return int(value)
+    if isinstance(value, str):
+        with contextlib.suppress(ValueError):
+            return int(value)
     try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        value = Decimal(text)
+        number = Decimal(value) if isinstance(value, (str, float)) and not isinstance(value, bool) else None
     except InvalidOperation:
-        value = Decimal("NaN")
-    # The digit cap keeps int() from expanding a number like 1e999999999.
-    if not value.is_finite() or value != value.to_integral_value() or value.adjusted() >= _INTEGER_DIGITS:
-        raise ValueError(f"expected an integer, got {text!r}")
-    return int(value)
+        number = None
+    if number is None or not number.is_finite() or number != number.to_integral_value():
+        raise ValueError(f"expected an integer, got {value!r}")
+    if number.adjusted() >= _INTEGER_DIGITS:  # not expanded: int() of 1e999999999 would take minutes
+        raise ValueError(f"{value} has more than {_INTEGER_DIGITS} digits, far beyond any range")
+    return int(number)

@@ -13,6 +13,7 @@ precision, or ``[run] max_seeds`` are grown (``sweep.run_sweep``).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import hashlib
@@ -28,6 +29,11 @@ from ._version import __version__
 
 MAX_PARTICLES = 100_000_000
 """Largest particle count a spec may ask for (a guard against typos like 1e12)."""
+MAX_TASKS = 10_000_000
+"""Most clusters a sweep may grow (a target sweep: at its max_seeds). Its list of tasks is built before
+the plan (``plan``) weighs memory and disk; 10^4 clusters of 10^3 took 13 s, so this is hours at least."""
+MAX_WORKERS = 1024
+"""Most threads of the embedded cluster (``[run] workers``, ``--workers``)."""
 
 _SECTIONS = ("grid", "model", "run")
 _TOP_KEYS = ("name",)
@@ -145,6 +151,12 @@ class Spec:
         """Every configuration's parameters (``params.resolve``), in C order: resolved once per spec."""
         return [_params.resolve(**self.fixed, **config) for config in self.configurations()]
 
+    @property
+    def parameters(self) -> list:
+        """Every configuration's parameters, resolved (``params.resolve``), in C order: a dict per grid point,
+        seeds aside."""
+        return self._resolved
+
     def stores(self, task: Task) -> bool:
         """Whether the positions of ``task``'s cluster are stored (``[run] store_clusters``)."""
         return self.store_clusters is None or task.index[-1] < self.store_clusters
@@ -251,12 +263,12 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
     if "n_particles" not in grid:
         raise SpecError("grid.n_particles: missing (the particle counts to measure at)")
     counts = sorted(_int_list("grid.n_particles", grid["n_particles"], 1, MAX_PARTICLES))
-    sizes = _int_list("grid.size", grid.get("size", [0]), 0, None)
+    sizes = _int_list("grid.size", grid.get("size", [0]), 0, _params.MAX_SIZE)
     seeds = grid.get("seeds", 1)
     if isinstance(seeds, list):
-        seeds = _int_list("grid.seeds", seeds, 0, None)
+        seeds = _int_list("grid.seeds", seeds, 0, _params.MAX_SEED)
     else:
-        seeds = list(range(_integer("grid.seeds", seeds, 1, None)))
+        seeds = list(range(_integer("grid.seeds", seeds, 1, MAX_TASKS)))
 
     fixed, axes = {}, {}
     for key, value in model.items():
@@ -267,22 +279,43 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
         if isinstance(value, list):
             if not value:
                 raise SpecError(f"model.{key}: empty list")
+            value = [_typed(key, v) for v in value]
             _unique(f"model.{key}", value)
             axes[key] = tuple(value)
         else:
-            fixed[key] = value
+            fixed[key] = _typed(key, value)
 
-    root_seed = _integer("run.root_seed", run.get("root_seed", 0), 0, None)
+    root_seed = _integer("run.root_seed", run.get("root_seed", 0), 0, _params.MAX_SEED)
     workers = run.get("workers")
     if workers is not None:
-        workers = _integer("run.workers", workers, 1, None)
+        workers = _integer("run.workers", workers, 1, MAX_WORKERS)
     target_ci, max_seeds = _precision(grid, run, len(seeds))
     store_clusters = _store_clusters(run.get("store_clusters", "all"))
 
     spec = Spec(name.strip(), tuple(sizes), tuple(counts), tuple(seeds), fixed, axes,
                 root_seed, workers, text, target_ci, max_seeds, store_clusters)
+    _check_tasks(spec)
     _check_grid(spec)
     return spec
+
+
+def _typed(key, value):
+    """A model value as its parameter's type where the one integer rule (``params.integer``) allows:
+    ``walkers = 1e3`` is 1000, as ``--walkers 1e3`` is; anything else is left for ``resolve`` to judge."""
+    if _params.PARAMETERS[key].kind is int and _params.is_number(value):
+        with contextlib.suppress(ValueError):
+            return _params.integer(value)
+    return value
+
+
+def _check_tasks(spec):
+    """Refuse a grid of more than ``MAX_TASKS`` clusters (a target sweep's at its max_seeds), naming the key of
+    its seeds."""
+    n = spec.n_tasks if spec.max_seeds is None else spec.n_tasks // len(spec.seeds) * spec.max_seeds
+    if n > MAX_TASKS:
+        key = "run.max_seeds" if spec.max_seeds is not None else "grid.seeds"
+        raise SpecError(f"{key}: the sweep would grow {n:,} clusters, more than {MAX_TASKS:,} "
+                        f"({' x '.join(map(str, spec.shape[:-1]))} configurations)")
 
 
 def _precision(grid, run, first_batch):
@@ -297,7 +330,7 @@ def _precision(grid, run, first_batch):
     if isinstance(grid.get("seeds"), list):
         raise SpecError("grid.seeds: with run.target_ci it must be a count (the first batch, "
                         "replicates 0..n-1), not a list")
-    max_seeds = _integer("run.max_seeds", run.get("max_seeds", DEFAULT_MAX_SEEDS), 1, None)
+    max_seeds = _integer("run.max_seeds", run.get("max_seeds", DEFAULT_MAX_SEEDS), 1, MAX_TASKS)
     if max_seeds < first_batch:
         raise SpecError(f"run.max_seeds: {max_seeds} is below grid.seeds = {first_batch}, the first batch")
     return float(target_ci), max_seeds
@@ -307,10 +340,10 @@ def _store_clusters(value):
     """``[run] store_clusters``: "all" (None), "none" (0), or a count K >= 0 of seeds per configuration."""
     if value in ("all", "none"):
         return None if value == "all" else 0
-    if not _params.is_integer(value) or value < 0:
+    if isinstance(value, str) or not _params.is_number(value) or not math.isfinite(value) or value % 1:
         raise SpecError(f'run.store_clusters: expected "all", "none" or an integer >= 0 '
                         f"(the first K seeds of each configuration), got {value!r}")
-    return int(value)
+    return _integer("run.store_clusters", value, 0, MAX_TASKS)
 
 
 def _reject_unknown(prefix, table, known):
@@ -320,12 +353,16 @@ def _reject_unknown(prefix, table, known):
 
 
 def _integer(key, value, low, high):
-    if not _params.is_integer(value):
-        raise SpecError(f"{key}: expected an integer, got {value!r}")
-    if value < low or (high is not None and value > high):
-        bound = f">= {low}" if high is None else f"in [{low}, {high}]"
-        raise SpecError(f"{key}: {value} is not {bound}")
-    return int(value)
+    """``value`` as an int in [low, high], by the command line's rule (``params.integer``: ``1e5`` is one)."""
+    try:
+        if isinstance(value, str):  # TOML text is not a number
+            raise ValueError(f"expected an integer, got {value!r}")
+        number = _params.integer(value)
+    except ValueError as err:
+        raise SpecError(f"{key}: {err}") from None
+    if not low <= number <= high:
+        raise SpecError(f"{key}: {_params.text(value)} is not in [{low}, {high}]")
+    return number
 
 
 def _int_list(key, value, low, high):

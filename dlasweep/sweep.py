@@ -103,7 +103,7 @@ class Interrupted(KeyboardInterrupt):
 
 
 def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
-              scheduler_file=None):
+              scheduler_file=None, announce=None):
     """Grow and measure every cluster of a spec.
 
     Parameters
@@ -127,6 +127,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         (``progress.Lines``), for a log.
     scheduler_file : path, optional
         Connect to the scheduler described in this file.
+    announce : str, optional
+        A line for stderr once the first task is about to run (connected):
+        the plan (``plan.Plan``).
 
     Returns
     -------
@@ -162,6 +165,8 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                         print(f"{spec.name}: compiling kernels (once)", file=sys.stderr)
                     dask_client = session.enter_context(_connected(client, scheduler_file, workers or spec.workers, most,
                                                                    functools.partial(_load_kernels, spec)))
+                    if announce:
+                        print(announce, file=sys.stderr, flush=True)
                     session.enter_context(_collector_eased())
                 bar = (Lines(batch.n_tasks, batch.n_tasks - len(todo), spec.name) if lines else
                        tqdm(total=batch.n_tasks, initial=batch.n_tasks - len(todo), unit="cluster",
@@ -671,11 +676,10 @@ def _connected(client, scheduler_file, workers, n_tasks, load):
         yield client
         return
     if client is not None or scheduler_file is not None:
-        kwargs = {"scheduler_file": str(scheduler_file)} if scheduler_file else {"address": client}
-        with Client(**kwargs) as connected:
+        with Client(scheduler_address(client, scheduler_file)) as connected:
             yield connected
         return
-    threads = min(workers or _usable_cores(), n_tasks)
+    threads = embedded_threads(workers, n_tasks)
     # The kernels release the GIL, so one in-process worker with a thread per
     # core runs them in parallel, starts in milliseconds instead of a second
     # per spawned process, and loads the compiled kernels once, not per process.
@@ -696,6 +700,49 @@ def _connected(client, scheduler_file, workers, n_tasks, load):
             yield embedded
     finally:
         sys.setswitchinterval(interval)
+
+
+def scheduler_address(address=None, scheduler_file=None) -> str:
+    """A scheduler's address, as given or read from its scheduler file, checked for its form (not reached).
+
+    Raises
+    ------
+    ValueError
+        One line: what is wrong with the address or the file (the caller names the option).
+    """
+    from distributed.comm.addressing import parse_address, parse_host_port
+    from distributed.comm.registry import backends
+
+    if scheduler_file is not None:
+        try:
+            info = json.loads(Path(scheduler_file).read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError) as err:
+            raise ValueError(f"not a dask scheduler file ({type(err).__name__}: {err})") from None
+        address = info.get("address") if isinstance(info, dict) else None
+        if not isinstance(address, str):
+            raise ValueError('not a dask scheduler file (no "address" string)')
+    try:
+        scheme, location = parse_address(address)
+        if scheme not in backends:
+            raise ValueError(f"unknown protocol {scheme!r} (known: {', '.join(backends)})")
+        if scheme in ("tcp", "tls"):
+            host, port = parse_host_port(location)
+            if not host or not 0 < port < 65536:
+                raise ValueError("expected HOST:PORT, the port in [1, 65535]")
+        if scheme == "inproc":  # a scheduler in this process (an embedding program's, a test's)
+            fields = location.split("/")
+            if len(fields) != 3 or not fields[1].isdigit():
+                raise ValueError("expected inproc://HOST/PID/N")
+            if int(fields[1]) != os.getpid():
+                raise ValueError(f"names a scheduler inside process {fields[1]}, not this one")
+    except (ValueError, TypeError) as err:
+        raise ValueError(f"{address!r} is not a scheduler address ({err})") from None
+    return address
+
+
+def embedded_threads(workers, n_tasks=None) -> int:
+    """Threads of the embedded cluster: ``workers`` (default: the usable cores), at most one a task."""
+    return min(workers or _usable_cores(), n_tasks or math.inf)
 
 
 def _usable_cores() -> int:

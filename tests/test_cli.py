@@ -57,6 +57,21 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["sweep", "spec.toml", "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"], "--workers"),
     (["sweep", "spec.toml", "--scheduler", "x", "--scheduler-file", "s.json"], "--scheduler"),
     (["sweep", "spec.toml", "--scheduler-file", "absent.json"], "--scheduler-file"),
+    (["sweep", "spec.toml", "--scheduler", "notanaddress"], "--scheduler: 'notanaddress' is not a scheduler address"),
+    (["sweep", "spec.toml", "--scheduler", "tcp://host:99999"], "--scheduler: 'tcp://host:99999' is not"),
+    (["sweep", "spec.toml", "--scheduler", "inproc://x"], "--scheduler: 'inproc://x' is not a scheduler address"),
+    (["sweep", "spec.toml", "--scheduler", "inproc://h/1/1"], "names a scheduler inside process 1, not this one"),
+    (["sweep", "spec.toml", "--scheduler-file", "empty.json"], "--scheduler-file empty.json: not a dask scheduler"),
+    (["sweep", "spec.toml", "--scheduler-file", "garbage.json"], "--scheduler-file garbage.json: not a dask"),
+    (["sweep", "spec.toml", "--workers", "1e6"], "--workers: 1000000 is not in [1, 1024]"),
+    (["sweep", "huge.toml"], "grid.seeds: 100000000000 is not in [1, 10000000]"),
+    (["sweep", "heavy.toml"], "grid.n_particles: the sweep needs about 1.0 TB of memory"),
+    (["grow", "-n", "200", "--model", "offlattice", "--step", "1e9", "-o", "a.nc"], "--step: 1000000000.0 is above"),
+    (["grow", "-n", "10", "--stickiness", "1e-300", "-o", "a.nc"], "--stickiness"),
+    (["grow", "-n", "10", "--launch-factor", "1e200", "-o", "a.nc"], "--launch-factor: 1e+200 is above 100"),
+    (["grow", "-n", "10", "--max-steps", "1e25", "-o", "a.nc"], "--max-steps"),
+    (["grow", "-n", "10", "--seed", "1e30", "-o", "a.nc"], "--seed"),
+    (["grow", "-n", "1e400", "-o", "a.nc"], "-n"),
     (["report", "absent.nc"], "absent.nc"),
     (["report", "spec.toml"], "not a readable netCDF"),
     (["report", "spec.toml", "-o", "missing/report"], "missing"),
@@ -69,6 +84,11 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     (tmp_path / "spec.toml").write_text(TINY_SPEC)
     (tmp_path / "bad.toml").write_text(BAD_SPEC)
     (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345", 'root_seed = 1\nstore_clusters = "few"'))
+    (tmp_path / "huge.toml").write_text(TINY_SPEC.replace("seeds = 3", "seeds = 100000000000"))
+    (tmp_path / "heavy.toml").write_text("[grid]\nn_particles = 1e8\nseeds = 64\n[model]\ndim = 3\n[run]\n"
+                                         "workers = 64\n")  # 64 clusters of 10^8 in 3D at once
+    (tmp_path / "empty.json").write_text("{}")
+    (tmp_path / "garbage.json").write_text("garbage")
     store.save(store.cluster_dataset(dla.grow(5, 0), seed=0), tmp_path / "one.nc")
     before = files_under(tmp_path)
     status, out, err = run_cli(*argv)
@@ -93,7 +113,7 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
         assert f"--{name.replace('_', '-')}" in text and " ".join(param.meaning.split()) in text, name
     for name, values in {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}.items():
         assert f"--{name.replace('_', '-')} {{{values}}}" in text
-    assert "Default: 2*dim." in text and "Allowed: (0, 1]." in text
+    assert "Default: 2*dim." in text and "Allowed: [0.0001, 1]." in text
 
 
 @pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
@@ -268,7 +288,9 @@ def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_clu
     out = tmp_path / "tiny.nc"
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", dask_cluster.scheduler_address)
     assert status == 1
-    assert "task-0-0-0: MemoryError: no room" in err and len(err.strip().splitlines()) == 1
+    plan, failure = err.strip().splitlines()  # the plan, once connected, then one line of failure
+    assert plan.startswith("dlasweep sweep: plan: 12 clusters, 1,800 particles")
+    assert "task-0-0-0: MemoryError: no room" in failure
     with store.open_sweep(out) as ds:
         assert (ds["status"] == store.STATUS_FLAGS.index("error")).all()
     status, info, err = run_cli("info", out)

@@ -50,14 +50,14 @@ def test_every_workflow_spec_is_valid():
     (("stickiness = [1.0, 0.5]", 'stickiness = "high"'), "model.stickiness"),
     (('model = "lattice"', 'model = "square"'), "model.model"),
     (("dim = 2", "dim = 4"), "model.dim"),
-    (("dim = 2", "dim = 2.0"), "model.dim"),
+    (("dim = 2", "dim = 2.5"), "model.dim"),
     (("dim = 2", 'dim = 2\nlaunch = "box"'), "model.launch"),
     (("dim = 2", "dim = 2\nsize = 10"), "model.size"),
     (("dim = 2", "dim = 2\njumps = 1"), "model.jumps"),
     (("size = [0, 24]", "size = [0, 4]"), "grid.size"),
     (("size = [0, 24]", "size = [-1]"), "grid.size"),
     (("size = [0, 24]", "size = []"), "grid.size"),
-    (("n_particles = [20, 60, 150]", "n_particles = [1e3]"), "grid.n_particles"),
+    (("n_particles = [20, 60, 150]", "n_particles = [1.5e3, 2.5]"), "grid.n_particles"),
     (("n_particles = [20, 60, 150]", "n_particles = [0, 10]"), "grid.n_particles"),
     (("n_particles = [20, 60, 150]", "n_particles = [10000000000]"), "grid.n_particles"),
     (("n_particles = [20, 60, 150]", ""), "grid.n_particles"),
@@ -124,3 +124,40 @@ def test_store_clusters_names_the_seeds_whose_positions_are_kept(value, stored):
     # Parts without positions serve no run that stores them: a set value is in the digest, "all" is not.
     plain = parse_spec(TINY_SPEC)
     assert (spec.digest() == plain.digest()) == (stored is None)
+
+
+def test_integral_numbers_follow_the_command_lines_rule():
+    # TOML reads 1e5 as a float: accepted as `-n 1e5` is, and typed as the parameter is.
+    spec = parse_spec("[grid]\nn_particles = [1e5, 2.5e2]\nseeds = 2e0\nsize = [3.2e1]\n"
+                      "[model]\nwalkers = [1, 2e0]\nmax_steps = 1e9\n[run]\nroot_seed = 7.0\nworkers = 2.0\n"
+                      "store_clusters = 1.0\n")
+    assert spec.counts == (250, 100_000) and spec.seeds == (0, 1) and spec.sizes == (32,)
+    assert spec.axes == {"walkers": (1, 2)} and spec.fixed == {"max_steps": 10 ** 9}
+    assert all(type(v) is int for v in (*spec.counts, *spec.axes["walkers"], spec.fixed["max_steps"],
+                                         spec.root_seed, spec.workers, spec.store_clusters))
+    # The same value twice, once as a float, is the same value.
+    with pytest.raises(SpecError, match=r"^model.walkers: 1 appears twice"):
+        parse_spec("[grid]\nn_particles = 10\nsize = 32\n[model]\nwalkers = [1, 1.0]\n")
+
+
+@pytest.mark.parametrize("line, message", [
+    ("n_particles = [1e20]", "grid.n_particles: 1e+20 is not in [1, 100000000]"),
+    ("n_particles = [1.7e308]", "grid.n_particles: 1.7e+308 is not in [1, 100000000]"),
+    ("n_particles = 10\nseeds = 100000000000", "grid.seeds: 100000000000 is not in [1, 10000000]"),
+    ("n_particles = 10\nseeds = [1e19]", "grid.seeds: 1e+19 is not in [0, 9223372036854775807]"),
+    ("n_particles = 10\nsize = [1e6]", "grid.size: 1000000.0 is not in [0, 100000]"),
+    ("n_particles = 10\n[run]\nroot_seed = 1e30", "run.root_seed: 1e+30 is not in [0, 9223372036854775807]"),
+    ("n_particles = 10\n[run]\nworkers = 100000", "run.workers: 100000 is not in [1, 1024]"),
+    ("n_particles = 10\n[run]\nstore_clusters = 1e300", "run.store_clusters: 1e+300 is not in [0, 10000000]"),
+    ("n_particles = 10\nseeds = 2\n[run]\ntarget_ci = 1e-7\nmax_seeds = 100000000000000",
+     "run.max_seeds: 100000000000000 is not in [1, 10000000]"),
+    ("n_particles = 10\nsize = [0, 32]\nseeds = 6000000", "grid.seeds: the sweep would grow 12,000,000 clusters"),
+    ("n_particles = 10\nsize = [0, 32]\nseeds = 2\n[run]\ntarget_ci = 0.01\nmax_seeds = 6000000",
+     "run.max_seeds: the sweep would grow 12,000,000 clusters"),
+    ("n_particles = 10\n[model]\nmax_steps = 1e25", "model.max_steps: 10000000000000000905969664 is above 2**62"),
+    ('n_particles = 10\n[model]\nmodel = "offlattice"\nstep = 1e9', "model.step: 1000000000.0 is above 100"),
+])
+def test_every_integer_is_bounded_by_what_can_run(line, message):
+    with pytest.raises(SpecError) as caught:
+        parse_spec("[grid]\n" + line + "\n")
+    assert str(caught.value).startswith(message), str(caught.value)

@@ -145,7 +145,7 @@ def test_target_keys_parse_and_leave_the_digest_alone():
     ('target_ci = "0.01"', FIRST, "run.target_ci"),
     ("target_ci = true", FIRST, "run.target_ci"),
     ("target_ci = 0.01\nmax_seeds = 3", FIRST, "run.max_seeds"),
-    ("target_ci = 0.01\nmax_seeds = 8.0", FIRST, "run.max_seeds"),
+    ("target_ci = 0.01\nmax_seeds = 8.5", FIRST, "run.max_seeds"),
     ("target_ci = 0.01", 300, "run.max_seeds"),  # the default cap is below the first batch
     ("max_seeds = 8", FIRST, "run.max_seeds"),
     ("target_ci = 0.01", "[0, 1, 2]", "grid.seeds"),

@@ -1,0 +1,120 @@
+"""No input hangs a command, and Ctrl-C ends every one within a second: the real command, in a subprocess,
+off a terminal, under a time limit."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import TINY_SPEC, files_under
+
+COMMAND = [sys.executable, "-m", "dlasweep"]
+INTERRUPTED_WITHIN = 2.0
+"""Seconds a command may take to exit after SIGINT (it checks every ``grow.WATCH_SECONDS``)."""
+
+
+def run(*argv, cwd, timeout=120):
+    """Run the command to its end; (status, stdout, stderr)."""
+    done = subprocess.run([*COMMAND, *map(str, argv)], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    return done.returncode, done.stdout, done.stderr
+
+
+def cpu_seconds(pid) -> float:
+    """CPU time a process has used (user + system), from /proc."""
+    with open(f"/proc/{pid}/stat") as stat:
+        fields = stat.read().rpartition(")")[2].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def interrupt(argv, cwd, busy=4.0):
+    """Start a command, SIGINT it once it has worked ``busy`` CPU seconds (imports take about 1.5: it is then
+    growing), and return (status, stderr, seconds it took to exit)."""
+    process = subprocess.Popen([*COMMAND, *map(str, argv)], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while cpu_seconds(process.pid) < busy:
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "the command never got busy"
+            time.sleep(0.05)
+        process.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        try:
+            _, err = process.communicate(timeout=INTERRUPTED_WITHIN)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{' '.join(argv[:3])}: still running {INTERRUPTED_WITHIN} s after SIGINT")
+        return process.returncode, err, time.monotonic() - sent
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+
+
+@pytest.mark.parametrize("options", [[], ["--model", "offlattice"], ["--dim", "3"]])
+def test_ctrl_c_ends_a_growth_off_a_terminal(options, tmp_path):
+    # 3e6 particles take 20 s or more: the kernel is interrupted, not waited for.
+    status, err, seconds = interrupt(["grow", "-n", "3e6", *options, "-o", "big.nc"], tmp_path)
+    assert status == 130 and err == "dlasweep grow: interrupted\n", err
+    assert seconds < INTERRUPTED_WITHIN and files_under(tmp_path) == set()
+
+
+def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
+    (tmp_path / "long.toml").write_text("[grid]\nn_particles = [300000]\nseeds = 4\n")
+    status, err, seconds = interrupt(["sweep", "long.toml", "-o", "long.nc"], tmp_path)
+    lines = err.splitlines()
+    assert status == 130 and lines[-1].startswith("dlasweep sweep: interrupted"), err
+    # the plan first: 2 copies of 1.2e6 particles of 16 bytes on disk; the memory depends on the cores
+    assert len(lines) == 2 and re.fullmatch(r"dlasweep sweep: plan: 4 clusters, 1,200,000 particles \(1,200,000 "
+                                            r"stored\); about [\d.]+ MB of memory, 38.4 MB of disk", lines[0]), err
+    assert seconds < INTERRUPTED_WITHIN and not (tmp_path / "long.nc").exists()
+
+
+@pytest.mark.parametrize("options, named", [
+    (["--model", "offlattice", "--step", "1e9"], "--step: 1000000000.0 is above 100 diameters"),
+    (["--model", "offlattice", "--stickiness", "1e-300"], "--stickiness: 1e-300 is not in [0.0001, 1]"),
+    (["--model", "offlattice", "--launch-factor", "1e200"], "--launch-factor: 1e+200 is above 100"),
+    (["--size", "1e9", "--launch", "box"], "--size: 1000000000 is above 100000"),
+])
+def test_a_walk_that_would_not_end_is_refused(options, named, tmp_path):
+    # Each of these ran for as long as one waited (11 minutes seen for the step), deaf to SIGINT.
+    status, out, err = run("grow", "-n", "200", *options, "-o", "c.nc", cwd=tmp_path, timeout=60)
+    assert status == 2 and err.startswith(f"dlasweep grow: {named}"), err
+    assert err.count("\n") == 1 and out == "" and files_under(tmp_path) == set()
+
+
+@pytest.mark.parametrize("lines, named", [
+    ("seeds = 100000000000", r"grid.seeds: 100000000000 is not in \[1, 10000000\]"),
+    ("seeds = 2\n[run]\ntarget_ci = 1e-7\nmax_seeds = 100000000000000",
+     r"run.max_seeds: 100000000000000 is not in \[1, 10000000\]"),
+    # 10^7 clusters of 10^8: their measures alone take tens of GB, their particles petabytes
+    ("seeds = 10000000", r"grid.seeds: the sweep needs about [\d.]+ [GTP]B of (memory|disk), [\d.]+ [kMGT]B"),
+    ("seeds = 2\n[run]\ntarget_ci = 1e-7\nmax_seeds = 1e7",
+     r"run.max_seeds: the sweep needs about .* of (memory|disk)"),
+    ("seeds = 64\n[run]\nworkers = 64\n[model]\ndim = 3",
+     r"grid.n_particles: the sweep needs about 1.0 TB of memory, .* \(64 clusters of up to 100,000,000 "
+     r"particles\)"),
+])
+def test_a_sweep_that_cannot_run_is_refused_before_anything_is_written(lines, named, tmp_path):
+    (tmp_path / "spec.toml").write_text(f"[grid]\nn_particles = [1e6, 1e8]\n{lines}\n")
+    status, out, err = run("sweep", "spec.toml", "-o", "out.nc", cwd=tmp_path, timeout=60)
+    assert status == 2 and re.match(f"dlasweep sweep: {named}", err) and err.count("\n") == 1, err
+    assert out == "" and files_under(tmp_path) == {Path("spec.toml")}
+
+
+def test_a_toml_count_follows_the_command_lines_rule(tmp_path):
+    # n_particles = [1e5] is -n 1e5; [1e20] gets the range, as -n 1e20 does.
+    (tmp_path / "spec.toml").write_text("[grid]\nn_particles = [1e20]\n")
+    status, _, err = run("sweep", "spec.toml", cwd=tmp_path, timeout=60)
+    assert status == 2 and err == "dlasweep sweep: grid.n_particles: 1e+20 is not in [1, 100000000]\n", err
+    status, _, err = run("grow", "-n", "1e20", "-o", "c.nc", cwd=tmp_path, timeout=60)
+    assert status == 2 and err == "dlasweep grow: -n: 100000000000000000000 is not in [1, 100000000]\n", err
+    (tmp_path / "spec.toml").write_text("[grid]\nn_particles = [2e1, 3e1]\nseeds = 2\n")
+    status, out, err = run("sweep", "spec.toml", "-o", "twenty.nc", cwd=tmp_path, timeout=300)
+    assert status == 0 and out.startswith("twenty.nc: 2 clusters"), err
+    status, out, err = run("info", "twenty.nc", cwd=tmp_path, timeout=60)
+    assert status == 0 and "n_particles     2: 20, 30" in out, out
