@@ -28,6 +28,7 @@ import xarray as xr
 from .fit import Fit, ensemble, fit_dimension, fit_mass_radius, mass_radius_counts, seed_interval
 from .measure import radius_of_gyration
 from .params import PARAMETERS, STATUSES
+from .selection import with_selected_clusters
 
 HISTORY_START = 50
 """Smallest count on the local-slope curve: below, a cluster is a compact blob."""
@@ -229,7 +230,7 @@ class _Sweep:
     """The parts of a sweep dataset that the analysis reads, indexed by configuration."""
 
     def __init__(self, ds):
-        self.ds = ds
+        self.ds = ds = with_selected_clusters(ds)  # a selection on the grid (ds.sel) keeps its own clusters only
         self.config_dims = config_dims(ds)
         self.shape = tuple(ds.sizes[d] for d in self.config_dims)
         self.counts = ds["n_particles"].values.astype(np.int64)
@@ -664,7 +665,7 @@ class Readout:
     """
 
     def __init__(self, ds, summary=None):
-        self.ds = ds
+        self.ds = ds = with_selected_clusters(ds)
         self.s = summarise(ds) if summary is None else summary
         self.config_dims = config_dims(ds)
         self.params = [d for d in self.config_dims if d != "size"]

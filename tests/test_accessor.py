@@ -145,5 +145,8 @@ def test_summarise_and_report_of_a_selection(ds, tmp_path):
     np.testing.assert_allclose(summary["D"].values, whole["D"].values)
     # read from the stored clusters: those of stickiness 1.0, not the other clusters of the same seeds
     np.testing.assert_array_equal(summary["diffusion_median"].values, whole["diffusion_median"].values)
+    # the plain functions read a selection as the accessor does
+    plain = dla.summarise(ds.sel(stickiness=1.0), resamples=50)
+    np.testing.assert_array_equal(plain["diffusion_median"].values, whole["diffusion_median"].values)
     written = ds.sel(stickiness=1.0).dla.report(tmp_path)
     assert tmp_path / "report.md" in written and (tmp_path / "gallery.png").exists()
