@@ -96,4 +96,4 @@ def test_the_installed_wheel_runs_every_documented_command(installed):
     assert "headline D" in _run(installed, "info", "tiny.nc")
     _run(installed, "bench", "--quick", "-o", "bench")
     assert (home / "bench" / "bench.nc").is_file()
-    assert "#SBATCH" in _run(installed, "slurm", "tiny.toml", "--dry-run")
+    assert "#SBATCH" in _run(installed, "slurm", "tiny.toml", "-o", "cluster.nc", "--dry-run")
