@@ -90,6 +90,9 @@ def main(argv=None) -> int:
         _say(f"{command}: interrupted{_kept(err)}")
         return 130
     except (UsageError, SpecError, store.StoreError, ResumeError) as err:
+        subcommands = next(a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        if command == "dlasweep" and argv and argv[0] in subcommands:  # refused while parsing its own options
+            command = f"dlasweep {argv[0]}"
         _say(f"{command}: {_one_line(err)}")
         return 2
     except Exception as err:

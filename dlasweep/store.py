@@ -557,7 +557,7 @@ def _open(path, required, chunks=None) -> xr.Dataset:
     ``open_sweep``); else ``StoreError``."""
     path = Path(path)
     if not path.is_file():
-        raise StoreError(f"{path}: no such file")
+        raise StoreError(f"{path}: " + ("not a regular file" if path.exists() else "no such file"))
     try:
         ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks)
     except Exception as err:  # netCDF4/HDF5 raise OSError, RuntimeError, ValueError...

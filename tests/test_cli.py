@@ -77,6 +77,8 @@ BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]
     (["report", "spec.toml", "-o", "missing/report"], "missing"),
     (["report", "one.nc"], "one cluster"),
     (["info", "absent.nc"], "absent.nc"),
+    (["info", "/dev/null"], "/dev/null: not a regular file"),
+    (["grow", "-n", "10", "--seed", "1.5", "-o", "a.nc"], "dlasweep grow: argument --seed"),
     (["info", "spec.toml"], "not a readable netCDF"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli, tmp_path, monkeypatch):
