@@ -11,19 +11,18 @@ import sys
 import types
 
 from ._version import __version__
-from .fit import fit_dimension, fit_mass_radius
-from .grow import Cluster, grow
-from .measure import box_counts, radius_of_gyration
-from .spec import load_spec
 
-# dask, xarray and matplotlib load on first use, so that growing a cluster (a
-# benchmark probe, a worker) carries none of them
-_LAZY = {"run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "read_cluster": "store",
+# Every name loads on first use: growing a cluster (a benchmark probe, a
+# worker) carries no dask, xarray or matplotlib, and the command line
+# (``_entry``) starts before numba and numpy load, so Ctrl-C is one line then too.
+_LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "measure", "radius_of_gyration": "measure",
+         "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
+         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "read_cluster": "store",
          "summarise": "analysis", "report": "report"}
 
 
 class _Package(types.ModuleType):
-    """The package, whose ``report`` stays the function when the submodule of that name loads.
+    """The package, whose ``grow`` and ``report`` stay the functions when the submodules of those names load.
 
     Importing a submodule binds it on its package; loaded lazily, module
     ``dlasweep.report`` would then hide function ``dlasweep.report``.

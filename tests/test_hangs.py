@@ -63,6 +63,14 @@ def test_ctrl_c_ends_a_growth_off_a_terminal(options, tmp_path):
     assert seconds < INTERRUPTED_WITHIN and files_under(tmp_path) == set()
 
 
+@pytest.mark.parametrize("busy", [0.2, 0.8])
+def test_ctrl_c_while_the_command_loads_is_one_line_too(busy, tmp_path):
+    # The modules take about 1.5 CPU seconds to load (numpy, numba, netCDF): an interrupt then is no traceback.
+    status, err, seconds = interrupt(["grow", "-n", "3e6", "-o", "big.nc"], tmp_path, busy=busy)
+    assert status == 130 and err == "dlasweep grow: interrupted\n", err
+    assert seconds < INTERRUPTED_WITHIN and files_under(tmp_path) == set()
+
+
 def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
     (tmp_path / "long.toml").write_text("[grid]\nn_particles = [300000]\nseeds = 4\n")
     status, err, seconds = interrupt(["sweep", "long.toml", "-o", "long.nc"], tmp_path)
