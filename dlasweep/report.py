@@ -681,8 +681,11 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) 
         units = bias(r, ref, name)
         if np.isfinite(units):
             panel.annotate(f"{units:+.1f}", (x, r[name]), fontsize=6, xytext=(4 + shift, -9),
-                           textcoords="offset points", color=colour)
+                           textcoords="offset points", color=colour, annotation_clip=False,
+                           bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
             drawn.add("bias")
+    if sweep.ds[axis].dtype != bool:
+        panel.margins(x=0.12)  # room for the rightmost point's number inside the axes
     return drawn | {"exact"}
 
 
