@@ -34,8 +34,9 @@ def cpu_seconds(pid) -> float:
 def interrupt(argv, cwd, busy=4.0):
     """Start a command, SIGINT it once it has worked ``busy`` CPU seconds (imports take about 1.5: it is then
     growing), and return (status, stderr, seconds it took to exit)."""
+    # SIGINT as a terminal delivers it: a shell's background job (a CI runner, say) starts with it ignored
     process = subprocess.Popen([*COMMAND, *map(str, argv)], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True)
+                               text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 120
         while cpu_seconds(process.pid) < busy:

@@ -139,7 +139,7 @@ def test_dry_run_prints_the_job_script_and_starts_nothing(tmp_path, monkeypatch,
     (["--python", "/no/python"], "dlasweep slurm: --python /no/python: not an executable file"),
     (["-o", "out.txt"], "dlasweep slurm: -o out.txt: expected a file ending in .nc"),
     (["-o", "no/such/out.nc"], "dlasweep slurm: -o no/such/out.nc: folder no/such does not exist"),
-    (["--frobnicate"], "dlasweep: unrecognized arguments: --frobnicate"),
+    (["--frobnicate"], "dlasweep slurm: unrecognized arguments: --frobnicate"),
 ])
 def test_bad_options_exit_2_with_one_line(argv, message, tmp_path, monkeypatch, run_cli):
     monkeypatch.chdir(tmp_path)
