@@ -3,7 +3,6 @@ sweeps end to end; what ``info`` tells of a file."""
 
 import contextlib
 import io
-import re
 import shutil
 import signal
 import subprocess

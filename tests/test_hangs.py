@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import TINY_SPEC, files_under
+from conftest import files_under
 
 COMMAND = [sys.executable, "-m", "dlasweep"]
 INTERRUPTED_WITHIN = 2.0
