@@ -17,7 +17,8 @@ from ._version import __version__
 # (``_entry``) starts before numba and numpy load, so Ctrl-C is one line then too.
 _LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "measure", "radius_of_gyration": "measure",
          "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
-         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "read_cluster": "store",
+         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "cluster_parents": "store",
+         "read_cluster": "store",
          "summarise": "analysis", "report": "report"}
 
 
@@ -99,6 +100,7 @@ __all__ = [
     "run_sweep",
     "open_sweep",
     "cluster_points",
+    "cluster_parents",
     "read_cluster",
     "report",
     "__version__",

@@ -43,6 +43,12 @@ class Cluster:
         count was not reached).
     seconds : float
         The whole growth (NaN when not known).
+    parents : ndarray, (n_grown,) int32
+        Index of the particle each one stuck to, -1 for the seed particles
+        and for those that stuck to a substrate: the cluster as a tree. Off
+        the lattice, the disk (sphere) touched at contact; on it, of the
+        occupied neighbours touched, the earliest attached, the substrate
+        first (``kernels.lattice.parents``). None when not known.
     """
 
     points: np.ndarray
@@ -52,6 +58,7 @@ class Cluster:
     checkpoints: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     seconds: float = np.nan
+    parents: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -153,8 +160,8 @@ def _checked(n, checkpoints, params):
 
 
 def _cluster(result, p, marks):
-    points, steps, code, times, seconds = result
-    return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds)
+    points, steps, parents, code, times, seconds = result
+    return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds, parents)
 
 
 def _watched(kernel, n, p, marks, rng, progress=None):
@@ -187,7 +194,7 @@ def _watched(kernel, n, p, marks, rng, progress=None):
             progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
     if isinstance(result[0], BaseException):
         raise result[0]
-    points, steps, code, _, seconds = result[0]
+    points, steps, parents, code, _, seconds = result[0]
     if progress is not None:
         progress(len(points), time.perf_counter() - start)
-    return points, steps, code, times[0, np.isin(watch, marks)], seconds
+    return points, steps, parents, code, times[0, np.isin(watch, marks)], seconds

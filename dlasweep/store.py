@@ -2,8 +2,8 @@
 
 Layout (README, "The dataset"): the measured quantities on dims
 ``(<swept params>..., size, n_particles, seed[, scale])``; the clusters as a
-CF contiguous ragged array, ``x``, ``y`` (``z``) and ``diffusion_time`` along
-``particle`` with the count variable ``cluster_particles(cluster)``, whose
+CF contiguous ragged array, ``x``, ``y`` (``z``), ``diffusion_time`` and
+``parent`` along ``particle`` with the count variable ``cluster_particles(cluster)``, whose
 parameters are the ``cluster_<name>`` coordinates on ``cluster``. Every
 model parameter that is not swept is a scalar coordinate, so ``ds["dim"]``
 or ``ds["model"]`` works whether or not it is a sweep axis.
@@ -145,6 +145,10 @@ SCHEMA = {
     **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
                    {"axis": a.upper()}) for a in AXES},
     "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
+    "parent": Variable(("particle",), np.int32, "1",
+                       "position in its cluster (0 = first) of the particle this one stuck to; "
+                       "-1 = none: a seed particle, or one that stuck to the substrate",
+                       {"valid_min": np.int32(-1)}),
     # Every model parameter: a sweep axis, else a scalar; strings have no units.
     **{name: Variable((name,), p.kind, p.units, p.meaning) for name, p in _params.PARAMETERS.items()},
 }
@@ -291,6 +295,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
         **{a: ("particle", _positions(points[:, k])) for k, a in enumerate(AXES[: points.shape[1]])},
         "diffusion_time": ("particle", np.asarray(cluster.steps, np.int64)),
+        "parent": ("particle", np.asarray(cluster.parents, np.int32)),
     }
     attrs = {
         "title": "dlasweep: one diffusion-limited aggregation cluster",
@@ -310,36 +315,37 @@ def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
 
     Parameters
     ----------
-    clusters : iterable of (ndarray, ndarray)
-        Each stored cluster's points ``(n, dim)`` and diffusion times, in
-        ``cluster`` order.
+    clusters : iterable of (ndarray, ndarray, ndarray)
+        Each stored cluster's points ``(n, dim)``, diffusion times and
+        parents, in ``cluster`` order.
     """
     columns = ragged_columns(ds["model"], ds["dim"])
     ragged = {name: np.zeros(int(ds["cluster_particles"].sum()), dtype) for name, dtype in columns.items()}
     start = 0
-    for points, times in clusters:
-        for name, values in _cluster_columns(columns, points, times).items():
+    for points, times, parents in clusters:
+        for name, values in _cluster_columns(columns, points, times, parents).items():
             ragged[name][start:start + len(times)] = values
         start += len(times)
     return _describe(ds.assign({name: ("particle", values) for name, values in ragged.items()}))
 
 
-def _cluster_columns(columns, points, times) -> dict:
+def _cluster_columns(columns, points, times, parents) -> dict:
     """One cluster's values of each of ``columns``; 2D points get z = 0 among 3D columns."""
     axes = [name for name in columns if name in AXES]
     return {**{a: points[:, k] if k < points.shape[1] else np.zeros(len(points), points.dtype)
-               for k, a in enumerate(axes)}, "diffusion_time": times}
+               for k, a in enumerate(axes)}, "diffusion_time": times, "parent": parents}
 
 
 def ragged_columns(models, dims) -> dict:
-    """The per-particle variables of clusters of these models and dims, and their types: positions, then diffusion times.
+    """The per-particle variables of clusters of these models and dims, and their types: positions, diffusion times, parents.
 
     Lattice positions are int32 sites, off-lattice ones float64 (and float64
     for all when both are swept); with ``dim`` swept, 2D clusters lie in the
     z = 0 plane of 3D columns.
     """
     lattice = bool((np.asarray(models) == "lattice").all())
-    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(np.int64)}
+    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(np.int64),
+            "parent": np.dtype(SCHEMA["parent"].dtype)}
 
 
 PARTICLE_CHUNK = 1 << 16
@@ -387,9 +393,9 @@ def save(ds: xr.Dataset, path, clusters=None) -> None:
     ----------
     ds : xarray.Dataset
     path : path
-    clusters : iterable of (ndarray, ndarray), optional
-        For a sweep from ``to_dataset``: each stored cluster's points and
-        diffusion times, in ``cluster`` order, written as they come.
+    clusters : iterable of (ndarray, ndarray, ndarray), optional
+        For a sweep from ``to_dataset``: each stored cluster's points,
+        diffusion times and parents, in ``cluster`` order, written as they come.
         Default: ``ds``'s own per-particle variables, if any.
     """
     path = Path(path)
@@ -399,8 +405,8 @@ def save(ds: xr.Dataset, path, clusters=None) -> None:
     writer = ParticleWriter(path.with_name(f"{path.name}.tmp{os.getpid()}"), columns)
     try:
         if clusters is not None:
-            for points, times in clusters:
-                writer.add(points, times)
+            for cluster in clusters:
+                writer.add(*cluster)
         else:
             for i in range(0, ds.sizes.get("particle", 0), PARTICLE_CHUNK):
                 writer.add_columns({name: ds[name][i:i + PARTICLE_CHUNK].values for name in particle})
@@ -453,9 +459,10 @@ class ParticleWriter:
         finally:
             netCDF4.set_chunk_cache(*cache)
 
-    def add(self, points, times):
-        """Append one cluster: its points ``(n, dim)`` (2D ones get z = 0 among 3D columns) and diffusion times."""
-        self.add_columns(_cluster_columns(self._variables, points, times))
+    def add(self, points, times, parents):
+        """Append one cluster: its points ``(n, dim)`` (2D ones get z = 0 among 3D columns), diffusion times and
+        parents."""
+        self.add_columns(_cluster_columns(self._variables, points, times, parents))
 
     def add_columns(self, block: dict):
         """Append values of every per-particle variable (arrays of one length); whole chunks are written."""
@@ -595,6 +602,32 @@ def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
     return np.stack([ds[a][start:stop].values for a in AXES[:_cluster_value(ds, "dim", index)]], axis=1)
 
 
+def cluster_parents(ds: xr.Dataset, index=None, **where) -> np.ndarray:
+    """Parents of one stored cluster's particles, in attachment order (``Cluster.parents``).
+
+    Parameters
+    ----------
+    ds, index, where
+        As for ``cluster_points``.
+
+    Returns
+    -------
+    ndarray, (n,) int32
+        Position in the cluster of the particle each one stuck to; -1 for
+        the seed particles and those that stuck to a substrate.
+
+    Raises
+    ------
+    StoreError
+        When the file predates parents (no ``parent`` variable).
+    """
+    if "parent" not in ds.variables:
+        raise StoreError("parent: this file holds no parents (written before dlasweep stored them)")
+    index = _index(ds, index, where)
+    start, stop = _particles_of(ds, index)
+    return ds["parent"][start:stop].values.astype(np.int32)
+
+
 def read_cluster(ds: xr.Dataset, index=None, **where):
     """One stored cluster, as ``grow`` returned it: points, diffusion times, status and parameters.
 
@@ -620,7 +653,8 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
     params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS
               if name in ds.coords or f"cluster_{name}" in ds.coords}
     return Cluster(cluster_points(ds, index), ds["diffusion_time"][start:stop].values, _status(ds, index),
-                   _params.resolve(**params))
+                   _params.resolve(**params),
+                   parents=cluster_parents(ds, index) if "parent" in ds.variables else None)
 
 
 def _index(ds, index, where) -> int:

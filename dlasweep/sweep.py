@@ -331,6 +331,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],
             "diffusion_time": np.asarray(cluster.steps if stored else cluster.steps[:0], np.int64),
+            "parent": np.asarray(cluster.parents if stored else cluster.parents[:0], np.int32),
             "error": np.array(""),
         }
     except Exception as err:
@@ -349,7 +350,7 @@ def error_result(counts, n_scales, dim, message) -> dict:
     result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
     result["status"][:] = STATUSES.index("error")
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
-            "error": np.array(store.one_line(message))}
+            "parent": store.blank("parent", 0), "error": np.array(store.one_line(message))}
 
 
 class Parts:
@@ -372,7 +373,7 @@ class Parts:
     """
 
     KEEP_BYTES = 1 << 28
-    PER_PARTICLE = ("points", "diffusion_time")
+    PER_PARTICLE = ("points", "diffusion_time", "parent")
 
     def __init__(self, path: Path):
         self.path = path
@@ -836,12 +837,12 @@ class _Stream:
         ready = list(itertools.takewhile(lambda key: key not in self.pending,
                                          itertools.islice(self.keys, self.next, None)))
         for result in self.parts.results(ready, Parts.PER_PARTICLE, release=True):
-            self.writer.add(result["points"], result["diffusion_time"])
+            self.writer.add(*(result[name] for name in Parts.PER_PARTICLE))
         self.next += len(ready)
 
 
 def _clusters(spec, parts):
-    """Points and diffusion times of each stored cluster, in order, read from the parts one part at a time."""
+    """Points, diffusion times and parents of each stored cluster, in order, read from the parts one part at a time."""
     stored = (t.key for t in spec.tasks() if spec.stores(t))
-    for result in parts.results(stored, ("points", "diffusion_time")):
-        yield result["points"], result["diffusion_time"]
+    for result in parts.results(stored, Parts.PER_PARTICLE):
+        yield tuple(result[name] for name in Parts.PER_PARTICLE)

@@ -123,18 +123,18 @@ def test_a_lazy_dataset_reads_one_cluster_only(swept, opener):
     chunks = {"particle": 100}
     ds = dla.open_sweep(swept, chunks=chunks) if opener == "open_sweep" else xr.open_dataset(swept, chunks=chunks)
     with ds:
-        assert all(len(ds[v].chunks[0]) == 24 for v in ("x", "y", "diffusion_time"))
+        assert all(len(ds[v].chunks[0]) == 24 for v in ("x", "y", "diffusion_time", "parent"))
         ran = []
         with dask.config.set(scheduler="sync"), Callback(pretask=lambda key, *_: ran.append(key)):
             c = ds.sel(stickiness=0.5).dla.cluster(seed=2)
         assert c.n == 300 and c.steps.sum() > 0
-        # the cluster's particles 1800 to 2100 lie in 3 of each variable's 24 chunks: 9 chunks read from the file
+        # the cluster's particles 1800 to 2100 lie in 3 of each variable's 24 chunks: 12 chunks read from the file
         # (xr.open_dataset leaves the small variables to dask too: their reads are not counted)
         small = [f"open_dataset-{name}-" for name, var in ds.variables.items() if "particle" not in var.dims]
         reads = [key for key in ran if isinstance(key, tuple) and key[0].startswith("open_dataset-")
                  and not key[0].startswith(tuple(small))]
-        assert len(reads) == 9, ran
-        assert all(not ds[v].variable._in_memory for v in ("x", "y", "diffusion_time"))
+        assert len(reads) == 12, ran
+        assert all(not ds[v].variable._in_memory for v in ("x", "y", "diffusion_time", "parent"))
         with dla.open_sweep(swept) as eager:
             np.testing.assert_array_equal(c.points, eager.dla.cluster(stickiness=0.5, seed=2).points)
 

@@ -13,11 +13,12 @@ def test_the_plan_counts_every_cluster_to_the_largest_count():
     spec = parse_spec(TINY_SPEC)  # 2 stickiness x 2 sizes x 3 seeds, to 150 particles, lattice 2D
     the_plan = plan.plan(spec, threads=2)
     assert (the_plan.clusters, the_plan.particles, the_plan.stored) == (12, 1800, 1800)
-    # two lattice 2D clusters at once: the kernel's bytes and two copies of x, y (int32) and the time (int64)
-    assert the_plan.growing == 2 * (plan.KERNEL_BYTES["lattice", 2] + 2 * 16) * 150
-    assert the_plan.disk >= 2 * 1800 * 16 and the_plan.memory > plan.BASE_BYTES
+    # two lattice 2D clusters at once: the kernel's bytes and two copies of x, y (int32), the time (int64) and
+    # the parent (int32)
+    assert the_plan.growing == 2 * (plan.KERNEL_BYTES["lattice", 2] + 2 * 20) * 150
+    assert the_plan.disk >= 2 * 1800 * 20 and the_plan.memory > plan.BASE_BYTES
     assert str(the_plan).startswith("plan: 12 clusters, 1,800 particles (1,800 stored); about ")
-    assert plan.plan(spec, threads=64).growing == 12 * (plan.KERNEL_BYTES["lattice", 2] + 2 * 16) * 150
+    assert plan.plan(spec, threads=64).growing == 12 * (plan.KERNEL_BYTES["lattice", 2] + 2 * 20) * 150
 
 
 def test_a_target_sweep_is_planned_at_its_max_seeds_and_stored_clusters_are_counted():
@@ -27,13 +28,13 @@ def test_a_target_sweep_is_planned_at_its_max_seeds_and_stored_clusters_are_coun
 
 
 @pytest.mark.parametrize("room, local, key", [
-    (plan.Room(memory=GB // 10, disk=None), True, "grid.n_particles: the sweep needs about 1.7 GB of memory, "
+    (plan.Room(memory=GB // 10, disk=None), True, "grid.n_particles: the sweep needs about 1.9 GB of memory, "
                                                   "100.0 MB available (4 clusters of up to 10,000,000 particles)"),
-    (plan.Room(memory=None, disk=GB // 10), True, "grid.seeds: the sweep needs about 1.3 GB of disk, 100.0 MB free"),
-    (plan.Room(memory=GB // 10, disk=GB // 10), False, "grid.seeds: the sweep needs about 1.3 GB of disk"),
+    (plan.Room(memory=None, disk=GB // 10), True, "grid.seeds: the sweep needs about 1.6 GB of disk, 100.0 MB free"),
+    (plan.Room(memory=GB // 10, disk=GB // 10), False, "grid.seeds: the sweep needs about 1.6 GB of disk"),
 ])
 def test_what_does_not_fit_is_refused_naming_the_key(room, local, key):
-    # two clusters of 10^7 growing: 2 x (34 + 32) x 10^7 = 1.3 GB, and the process; on disk 2 x 4e7 x 16 bytes
+    # two clusters of 10^7 growing: 2 x (34 + 40) x 10^7 = 1.5 GB, and the process; on disk 2 x 4e7 x 20 bytes
     spec = parse_spec("[grid]\nn_particles = [1e7]\nseeds = 4\n")
     with pytest.raises(SpecError) as caught:
         plan.check(plan.plan(spec, threads=2), spec, room, local=local)

@@ -49,7 +49,8 @@ def synthetic_parts(spec_text=SPEC, failed=()):
     }
     stored = [t for t in spec.tasks() if spec.stores(t)]
     sizes = rng.integers(0, 9, len(stored))
-    clusters = [(rng.normal(size=(n, 2)), rng.integers(0, 50, n)) for n in sizes]
+    clusters = [(rng.normal(size=(n, 2)), rng.integers(0, 50, n), (rng.random(n) * np.arange(n)).astype(np.int32) - 1)
+                for n in sizes]
     return store.to_dataset(spec, scales, history, science, sizes, failed), clusters
 
 
@@ -86,8 +87,10 @@ def test_layout_follows_design(saved):
     assert ds["box_count"].dims == ("model", "jumps", "size", "n_particles", "seed", "scale")
     for name in ("n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "wall_time", "walk_steps"):
         assert ds[name].dims == ("model", "jumps", "size", "n_particles", "seed")
-    for name in ("x", "y", "diffusion_time"):
+    for name in ("x", "y", "diffusion_time", "parent"):
         assert ds[name].dims == ("particle",)
+    assert ds["parent"].dtype == np.int32 and ds["parent"].attrs["units"] == "1"
+    assert "-1 = none" in ds["parent"].attrs["long_name"] and ds["parent"].attrs["valid_min"] == -1
     assert ds["cluster_particles"].dims == ("cluster",)
     assert int(ds["cluster_particles"].sum()) == ds.sizes["particle"]
     for name in ("cluster_model", "cluster_jumps", "cluster_size", "cluster_seed"):
@@ -215,7 +218,7 @@ def test_clusters_are_a_cf_ragged_array_of_trajectories(saved, tmp_path):
         roles = {name: var.cf_role for name, var in nc.variables.items() if "cf_role" in var.ncattrs()}
         assert roles == {"cluster": "trajectory_id"} and nc["cluster"].dimensions == ("cluster",)
         np.testing.assert_array_equal(nc["cluster"][:], np.arange(nc.dimensions["cluster"].size))
-        assert nc["diffusion_time"].coordinates == "x y" and (nc["x"].axis, nc["y"].axis) == ("X", "Y")
+        assert nc["diffusion_time"].coordinates == nc["parent"].coordinates == "x y" and (nc["x"].axis, nc["y"].axis) == ("X", "Y")
         # No attribute but CF's: xarray's own marker of booleans ("dtype") is gone.
         assert [name for name, var in nc.variables.items() if "dtype" in var.ncattrs()] == []
         assert nc["jumps"].dtype == np.int8 and nc["jumps"].flag_meanings == "false true"
@@ -303,6 +306,9 @@ def test_cluster_points(tmp_path):
     where = {name.removeprefix("cluster_"): ds[name].values[k]
              for name in ds.coords if name.startswith("cluster_")}
     np.testing.assert_array_equal(store.cluster_points(ds, **where), expected)
+    parents = store.cluster_parents(ds, **where)
+    assert parents.dtype == np.int32
+    np.testing.assert_array_equal(parents, ds["parent"].values[start:start + counts[k]])
     with pytest.raises(ValueError, match="matches 8 clusters"):
         store.cluster_points(ds, model="lattice")
     with pytest.raises(ValueError, match="colour: not a cluster parameter"):
@@ -313,11 +319,17 @@ def test_cluster_points(tmp_path):
 
 def test_one_cluster_file(tmp_path):
     points = np.array([[0, 0], [1, 0], [1, 1]])
-    cluster = Cluster(points, np.array([0, 5, 7]), "boundary", resolve(size=16))
+    cluster = Cluster(points, np.array([0, 5, 7]), "boundary", resolve(size=16), parents=np.array([-1, 0, 1]))
     path = tmp_path / "one.nc"
     store.save(store.cluster_dataset(cluster, seed=4), path)
     ds = store.open_sweep(path)
     np.testing.assert_array_equal(store.cluster_points(ds, 0), points)
+    np.testing.assert_array_equal(dla.cluster_parents(ds, 0), [-1, 0, 1])
+    np.testing.assert_array_equal(store.read_cluster(ds, 0).parents, [-1, 0, 1])
+    older = ds.drop_vars("parent")  # a file written before parents were stored
+    assert store.read_cluster(older, 0).parents is None
+    with pytest.raises(store.StoreError, match="parent: this file holds no parents"):
+        store.cluster_parents(older, 0)
     assert ds["x"].dtype == np.int32 and int(ds["size"]) == 16 and bool(ds["jumps"])
     assert store.STATUS_FLAGS[int(ds["status"][0])] == "boundary"
     ds.close()
@@ -353,15 +365,17 @@ def test_streamed_clusters_fill_whole_compressed_chunks(tmp_path, monkeypatch):
             assert nc[name].chunking() == [5] and nc[name].filters()["complevel"] == store.PARTICLE_ZLIB
             assert nc[name].filters()["shuffle"] == store.shuffled(nc[name].dtype)  # float64: both models swept
             assert "_FillValue" not in nc[name].ncattrs()
-    np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _ in clusters]))
+    np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _, _ in clusters]))
+    np.testing.assert_array_equal(whole["parent"].values, np.concatenate([parents for _, _, parents in clusters]))
 
 
 def test_particle_writer_writes_whole_chunks_as_soon_as_full(tmp_path, monkeypatch):
     monkeypatch.setattr(store, "PARTICLE_CHUNK", 5)
-    writer = store.ParticleWriter(tmp_path / "part.nc", {"x": np.dtype(np.int32), "diffusion_time": np.dtype(np.int64)})
+    writer = store.ParticleWriter(tmp_path / "part.nc", {"x": np.dtype(np.int32), "diffusion_time": np.dtype(np.int64),
+                                                         "parent": np.dtype(np.int32)})
     written = []
     for n in (3, 9, 0, 4):
-        writer.add(np.arange(2 * n, dtype=np.int32).reshape(n, 2), np.full(n, n))
+        writer.add(np.arange(2 * n, dtype=np.int32).reshape(n, 2), np.full(n, n), np.arange(n, dtype=np.int32) - 1)
         written.append(writer.written)
     assert written == [0, 10, 10, 15]  # the last value waits for finish
     writer.discard()

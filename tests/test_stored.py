@@ -16,7 +16,7 @@ from dlasweep.measure import radius_of_gyration
 from dlasweep.report import report
 from dlasweep.spec import parse_spec
 
-PER_PARTICLE = ("x", "y", "diffusion_time", "cluster_particles")
+PER_PARTICLE = ("x", "y", "diffusion_time", "parent", "cluster_particles")
 """The variables of the stored clusters; everything else is measured for every cluster."""
 
 NOT_CURVES = ("diffusion_density", "diffusion_median", "diffusion_bin", "cluster_index", "seconds_per_particle",

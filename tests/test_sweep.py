@@ -43,6 +43,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
         seed = np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key)
         cluster = dla.grow(max(spec.counts), seed, **task.params)
         np.testing.assert_array_equal(store.cluster_points(reference, k), cluster.points)
+        np.testing.assert_array_equal(store.cluster_parents(reference, k), cluster.parents)
         cell = reference.isel(dict(zip(["stickiness", "size", "seed"], task.index)))
         for j, n in enumerate(spec.counts):
             m = min(n, cluster.n)

@@ -50,7 +50,8 @@ def main(argv=None):
     for level, log_chunk in itertools.product(map(int, args.levels.split(",")), map(int, args.chunks.split(","))):
         store.PARTICLE_ZLIB, store.PARTICLE_CHUNK = level, 1 << log_chunk
         path = args.out / f"z{level}-c{log_chunk}.nc"
-        clusters = ((grown[i % len(grown)].points, grown[i % len(grown)].steps) for i in range(args.clusters))
+        clusters = ((grown[i % len(grown)].points, grown[i % len(grown)].steps, grown[i % len(grown)].parents)
+                    for i in range(args.clusters))
         start = time.perf_counter()
         store.save(ds, path, clusters)
         write = time.perf_counter() - start

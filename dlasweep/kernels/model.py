@@ -84,11 +84,13 @@ def checkpoint(marks, times, passed, count, t0):
     return passed
 
 
-def grown(points, steps, count, status, times, seconds):
+def grown(points, steps, parents, count, status, times, seconds):
     """A kernel's result as ``dlasweep.grow`` takes it: the first ``count``
-    points and diffusion times (copied when growth stopped short, so that
-    the unused tail is freed), the status code, the times and the seconds
+    points, diffusion times and parents (copied when growth stopped short, so
+    that the unused tail is freed), the status code, the times and the seconds
     the growth took in all."""
     if count < len(points):
         points, steps = points[:count].copy(), steps[:count].copy()
-    return points, steps, int(status), times, float(seconds)
+    if count < len(parents):
+        parents = parents[:count].copy()
+    return points, steps, parents, int(status), times, float(seconds)

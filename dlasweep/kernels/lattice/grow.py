@@ -31,6 +31,7 @@ from ..walk import (
     xo,
 )
 from .exits import TABLE_MAX, exit_tables, symmetry, unit_moves
+from .parents import lattice_parents
 from .words import (
     FIELD_CAP,
     fine2,
@@ -613,6 +614,7 @@ def grow_lattice(n, p, marks, rngs, times=None):
     list, for each generator, of
         points : int32 (n_grown, dim)
         steps : int64 (n_grown,)
+        parents : int32 (n_grown,), the particle each one stuck to (``parents.lattice_parents``), -1 for none
         status : int code into ``dlasweep.params.STATUSES``
         times : float64 seconds at each of ``marks`` (NaN when not reached)
         seconds : float, the whole growth
@@ -624,6 +626,10 @@ def grow_lattice(n, p, marks, rngs, times=None):
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
-    _grow_each(n, model, unit_moves(model.dim, moore), np.asarray(marks, np.int64), list(rngs), points, steps, times,
+    moves = unit_moves(model.dim, moore)
+    _grow_each(n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps, times,
                counts, statuses, seconds, *exit_tables(model.dim, moore))
-    return [grown(*result) for result in zip(points, steps, counts, statuses, times, seconds)]
+    nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
+    period = model.size if model.seed_shape == codes.LINE else 0
+    return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)
+            for pts, st, count, *rest in zip(points, steps, counts, statuses, times, seconds)]

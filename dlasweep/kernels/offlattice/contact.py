@@ -63,9 +63,11 @@ def ray(w, u, length, nl, lx, ly, lz, line, dim):
 
 
 @jit
-def settle(w, u, t, hit, dim, lx, ly, lz, normal):
+def settle(w, u, t, hit, dim, lx, ly, lz, li, normal):
     """Move w to w + t u and put it at distance 1 exactly from what it hit;
-    ``normal`` gets the outward unit normal at the contact."""
+    ``normal`` gets the outward unit normal at the contact in its first
+    three entries and, in the fourth, the particle touched (``li[hit]``;
+    -1: the substrate), which becomes the parent of a walker that sticks."""
     for a in range(3):
         w[a] += t * u[a]
     if hit == -2:
@@ -73,7 +75,9 @@ def settle(w, u, t, hit, dim, lx, ly, lz, normal):
         for a in range(3):
             normal[a] = 0.0
         normal[dim - 1] = 1.0
+        normal[3] = -1.0
         return
+    normal[3] = li[hit]
     d0 = w[0] - lx[hit]
     d1 = w[1] - ly[hit]
     d2 = w[2] - lz[hit]
@@ -103,7 +107,7 @@ def cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, l
         nl = gather(c, 0.5 * piece + 1.0, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
         t, hit = ray(w, u, piece, nl, lx, ly, lz, line, dim)
         if hit != -1:
-            settle(w, u, t, hit, dim, lx, ly, lz, normal)
+            settle(w, u, t, hit, dim, lx, ly, lz, li, normal)
             return True
         for a in range(3):
             w[a] += piece * u[a]
@@ -146,7 +150,7 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
         p = np.empty(3)
         for a in range(3):
             p[a] = w[a]
-        settle(p, u, t, hit, dim, lx, ly, lz, normal)
+        settle(p, u, t, hit, dim, lx, ly, lz, li, normal)
         if gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0] == 0:
             for a in range(3):
                 w[a] = p[a]

@@ -272,7 +272,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                     for a in range(3):
                         w[a] += best * u[a]
                     continue
-                settle(w, u, best, hit, dim, lx, ly, lz, normal)  # once per contact: a call is cheap here
+                settle(w, u, best, hit, dim, lx, ly, lz, li, normal)  # once per contact: a call is cheap here
                 contact = True
             elif step == 0.0:
                 # single unit steps everywhere (jumps=false)
@@ -320,11 +320,12 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
 
 
 @jit
-def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
-    """Add the walker at w to the cluster; returns the new count, the grid
-    and, when the cluster outgrew the grid, its count of cell-list tiles,
-    else -1 (then the particle is not yet in the grid: the caller drops it
-    and builds a larger one)."""
+def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line, size, grid):
+    """Add the walker at w to the cluster, its parent the particle it touched
+    (``contact.settle`` records it); returns the new count,
+    the grid and, when the cluster outgrew the grid, its count of cell-list
+    tiles, else -1 (then the particle is not yet in the grid: the caller
+    drops it and builds a larger one)."""
     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
     up = dim - 1
     if line:
@@ -339,6 +340,7 @@ def _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid):
         r2 += w[a] * w[a]
         ch = max(ch, abs(w[a]))
     steps[count] = pending
+    parents[count] = parent
     geo[0] = max(geo[0], np.sqrt(r2))
     geo[1] = max(geo[1], ch)
     geo[2] = max(geo[2], w[up])
@@ -370,6 +372,7 @@ def _grow(n, model, marks, rng, times):
     -------
     points : float64 (n, dim), the first ``count`` rows grown
     steps : int64 (n,)
+    parents : int32 (n,)
     count : int
     status : int, a code of ``dlasweep.params.STATUSES``
     """
@@ -380,6 +383,7 @@ def _grow(n, model, marks, rng, times):
     cap = max(n, 1)
     pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
     steps = maps.filled(cap, 0, np.int64)
+    parents = maps.filled(cap, -1, np.int32)
     nxt = maps.filled(cap, -1, np.int32)
     count = min(n, nseed)
     geo = np.zeros(3)  # r_max, Chebyshev extent, h_max
@@ -396,11 +400,12 @@ def _grow(n, model, marks, rng, times):
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
     if model.walkers > 1:
-        count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid)
-        return pts, steps, count, status
+        count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, nxt, count, geo,
+                                  grid)
+        return pts, steps, parents, count, status
     w = np.zeros(3)
     u = np.zeros(3)
-    normal = np.zeros(3)
+    normal = np.zeros(4)  # and the particle touched (``contact.settle``)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
     lx, ly, lz, li = _neighbour_list()
@@ -432,18 +437,19 @@ def _grow(n, model, marks, rng, times):
         if not stuck:
             status = codes.STEP_LIMIT
             break
-        count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+        count, grid, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line, size,
+                                     grid)
         if tiles >= 0:  # dropped now (every name of it), the larger one built at the top of the next pass
             grid = no_grid()
             gi, gf, words, start, blocks, cells, dirr, heads, field = grid
             regrid = tiles
         pending = 0
         passed = checkpoint(marks, times, passed, count, t0)
-    return pts, steps, count, status
+    return pts, steps, parents, count, status
 
 
 @jit
-def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, count, geo, grid):
+def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, nxt, count, geo, grid):
     """Grow with ``model.walkers`` walkers at once: a finite concentration.
 
     They start uniformly in the box (not on a particle) and take single
@@ -463,7 +469,7 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
     w = np.zeros(3)
     u = np.zeros(3)
     e = np.zeros(3)
-    normal = np.zeros(3)
+    normal = np.zeros(4)  # and the particle touched (``contact.settle``)
     mx, my, mz, mi = _neighbour_list()
     for k in range(walkers):
         while True:
@@ -518,7 +524,8 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, nxt, coun
                     total += moves
                     pending += moves
             if stuck:
-                count, grid, tiles = _attach(w, count, pending, pts, steps, nxt, geo, dim, line, size, grid)
+                count, grid, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line,
+                                             size, grid)
                 if tiles >= 0:
                     grid = no_grid()
                     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
@@ -551,8 +558,8 @@ def _grow_each(n, model, marks, rngs, times):
     out = []
     for i in range(len(rngs)):
         start = clock()
-        pts, steps, count, status = _grow(n, model, marks, rngs[i], times[i])
-        out.append((pts, steps, count, status, times[i], clock() - start))
+        pts, steps, parents, count, status = _grow(n, model, marks, rngs[i], times[i])
+        out.append((pts, steps, parents, count, status, times[i], clock() - start))
     return out
 
 
@@ -560,7 +567,8 @@ def grow_offlattice(n, p, marks, rngs, times=None):
     """Grow off-lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow``.
 
     Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
-    the float64 centres of unit-diameter disks (spheres), (n_grown, dim).
+    the float64 centres of unit-diameter disks (spheres), (n_grown, dim), and
+    a parent is the particle touched at contact (``contact.settle``).
     """
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     return [grown(*result) for result in _grow_each(int(n), model_from(p), np.asarray(marks, np.int64), list(rngs),
