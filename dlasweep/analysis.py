@@ -25,6 +25,7 @@ from functools import cached_property
 import numpy as np
 import xarray as xr
 
+from . import branching
 from .fit import Fit, ensemble, fit_dimension, fit_mass_radius, mass_radius_counts, seed_interval
 from .measure import radius_of_gyration
 from .params import PARAMETERS, STATUSES
@@ -148,7 +149,8 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
         ``n_particles``; per-cluster fits also on ``seed``; the local slopes
         on ``n_local`` (the geometric centre of each octave); D_inf per
         configuration. Every variable has a ``long_name``; the module
-        docstring says how each is estimated.
+        docstring says how each is estimated. With stored clusters that
+        have parents, their branch statistics too (``branching.summary``).
     """
     sweep = _Sweep(ds)
     out = {name: np.full(sweep.shape + tuple(sweep.extra[d] for d in dims), np.nan)
@@ -159,7 +161,8 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
     _against_exact(sweep, out)
-    return sweep.dataset(out, resamples)
+    return sweep.dataset(out, resamples).merge(branching.summary(sweep.ds, sweep.config_dims, sweep.clusters,
+                                                                 MIN_CI_SEEDS))
 
 
 def config_dims(ds) -> list:

@@ -34,6 +34,7 @@ from .bench import exponent_attribute
 from .fit import MIN_DECADES, START_FRACTION
 from .params import text
 from .pictures import draw_points
+from .report_branching import branching_figure, branching_lines
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
@@ -725,6 +726,7 @@ _PLOTS = {
     "diffusion_times": _diffusion_times,
     "speed_accuracy": _speed_accuracy,
     "failure": _failure,
+    "branching": branching_figure,
 }
 """Every plot: name -> function(sweep, path) returning a caption, or None when skipped."""
 
@@ -786,6 +788,7 @@ def _write_report(sweep, figures, path) -> Path:
         "",
         *(["## Between configurations", "", *differences] if differences else []),
         *(["## Against the exact method", "", *deviations] if deviations else []),
+        *branching_lines(sweep),
         "## Summary table",
         "",
         "(Also in `summary.csv` with every column; ⚠ marks a configuration where a cluster stopped early.)",

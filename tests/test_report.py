@@ -18,14 +18,16 @@ from dlasweep.params import STATUSES
 from dlasweep.report import report
 
 
-def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
-    """A dataset with the layout of README, "The dataset", grown and measured here, not by run_sweep."""
+def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=False):
+    """A dataset with the layout of README, "The dataset", grown and measured here, not by run_sweep
+    (``parents``: with the clusters' parents, as files have them since they were stored)."""
     scales = default_scales(counts[-1])
     shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
     # Every variable but the growth history (a file from before it was recorded).
     science = {name: store.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
                for name in (*store.SCIENCE, "wall_time") if name != "radius_gyration_history"}
-    ragged, cluster = {a: [] for a in ("x", "y", "diffusion_time")}, {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
+    ragged = {a: [] for a in ("x", "y", "diffusion_time", *(["parent"] if parents else []))}
+    cluster = {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
     particles = []
     for where in itertools.product(*(range(len(v)) for v in axes.values()), range(len(sizes)), range(seeds)):
         params = {name: values[i] for (name, values), i in zip(axes.items(), where)}
@@ -47,6 +49,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3):
         ragged["x"].append(c.points[:, 0])
         ragged["y"].append(c.points[:, 1])
         ragged["diffusion_time"].append(c.steps)
+        if parents:
+            ragged["parent"].append(c.parents)
         particles.append(len(c.points))
         for name, value in (*params.items(), ("size", size), ("seed", seed)):
             cluster[f"cluster_{name}"].append(value)
