@@ -18,7 +18,7 @@ from ._version import __version__
 _LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "measure", "radius_of_gyration": "measure",
          "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
          "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "cluster_parents": "store",
-         "read_cluster": "store",
+         "read_cluster": "store", "export_cluster": "export",
          "summarise": "analysis", "report": "report"}
 
 
@@ -102,6 +102,7 @@ __all__ = [
     "cluster_points",
     "cluster_parents",
     "read_cluster",
+    "export_cluster",
     "report",
     "__version__",
 ]

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import export as _export
 from . import params as _params
 from . import plan as _plan
 from . import slurm, store
@@ -37,7 +38,10 @@ from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
 from .sweep import Interrupted, ResumeError, embedded_threads, run_sweep, scheduler_address
 
-GROW_SUFFIXES = (".nc", ".png", ".svg")
+PICTURES = (".png", ".svg")
+GROW_SUFFIXES = (".nc", *PICTURES, *(s for s in _export.FORMATS if s not in PICTURES))
+MESH_FILES = (".ply", ".obj")
+STYLES = ("disks", "tree")
 
 
 class UsageError(ValueError):
@@ -109,22 +113,30 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     one = commands.add_parser("grow", allow_abbrev=False,
-                              help="grow one cluster and save it (.nc) or draw it (.png, .svg)")
+                              help="grow one cluster and save it (.nc), draw it (.png, .svg) or export it "
+                                   "(.csv, .ply, .obj)")
     one.add_argument("-n", type=_params.integer, required=True, help="number of particles, e.g. 100000 or 1e5")
     one.add_argument("--seed", type=_params.integer, default=0, help="random seed (default 0)")
     for name, param in _params.PARAMETERS.items():
         one.add_argument(f"--{name.replace('_', '-')}", dest=name, **_option(name, param))
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
-    one.add_argument("-o", "--output", required=True, type=Path, help="output file: .nc, .png or .svg")
+    one.add_argument("-o", "--output", required=True, type=Path,
+                     help="output file: " + ", ".join(GROW_SUFFIXES))
     one.add_argument("--force", action="store_true", help="replace the output file if it exists")
-    look = one.add_argument_group("pictures (.png, .svg)")
-    look.add_argument("--size-inches", type=float, metavar="W",
-                      help=f"side of the square picture in inches (default {DEFAULT_INCHES:g})")
-    look.add_argument("--dpi", type=float, help=f"dots per inch (default: whole pixels per lattice site, a panel "
-                                                f"at least {PANEL_PIXELS} and the picture at most {MAX_PIXELS} "
-                                                f"pixels wide)")
+    _output_options(one)
     one.set_defaults(handler=_grow)
+
+    out = commands.add_parser("export", allow_abbrev=False,
+                              help="one stored cluster of a dataset as a table, a mesh or a picture")
+    out.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep` or `dlasweep grow`")
+    out.add_argument("--cluster", type=_params.integer, required=True, metavar="K",
+                     help="the cluster's position in the file (0 first; `dlasweep info` counts them)")
+    out.add_argument("-o", "--output", required=True, type=Path,
+                     help="output file: " + ", ".join(GROW_SUFFIXES))
+    out.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    _output_options(out)
+    out.set_defaults(handler=_export_cluster)
 
     many = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
     many.add_argument("spec", type=Path, help="sweep spec, e.g. workflows/quick.toml")
@@ -165,6 +177,82 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _output_options(command):
+    """The options of a cluster's output file: pictures' size and style, meshes' shape."""
+    look = command.add_argument_group("pictures (.png, .svg)")
+    look.add_argument("--size-inches", type=float, metavar="W",
+                      help=f"side of the square picture in inches (default {DEFAULT_INCHES:g})")
+    look.add_argument("--dpi", type=float, help=f"dots per inch (default: whole pixels per lattice site, a panel "
+                                                f"at least {PANEL_PIXELS} and the picture at most {MAX_PIXELS} "
+                                                f"pixels wide)")
+    look.add_argument("--style", choices=STYLES,
+                      help="disks: the particles, coloured by attachment order (default); tree: one line per "
+                           "Horton-Strahler branch, wider by order (.svg: vector paths for a plotter or a cutter)")
+    shape = command.add_argument_group("meshes (.ply, .obj)")
+    shape.add_argument("--mesh", choices=_export.MESHES,
+                       help="spheres: a sphere per particle (default); tubes: a tube along each bond")
+
+
+def _output(args, out) -> dict:
+    """The checked options of the output file ``out`` (``_output_options``): refused where they do not apply."""
+    suffix = out.suffix.lower()
+    if suffix not in GROW_SUFFIXES:
+        raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
+    for option, given, where in (("--size-inches", args.size_inches, PICTURES), ("--dpi", args.dpi, PICTURES),
+                                 ("--style", args.style, PICTURES), ("--mesh", args.mesh, MESH_FILES)):
+        if given is not None and suffix not in where:
+            raise UsageError(f"{option}: applies to {', '.join(where)} files, not to {out}")
+    picture = {"inches": DEFAULT_INCHES if args.size_inches is None else args.size_inches, "dpi": args.dpi}
+    try:
+        check_size(**picture)
+    except ValueError as err:
+        name, _, reason = str(err).partition(":")  # the message starts with the argument's name
+        raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
+    return {"picture": picture, "style": args.style or STYLES[0], "mesh": args.mesh or _export.MESHES[0]}
+
+
+def _write_cluster(cluster, out, seed, how):
+    """Save, draw or export one cluster to ``out`` as its extension and ``how`` (``_output``) say."""
+    suffix = out.suffix.lower()
+    if suffix == ".nc":
+        store.save(store.cluster_dataset(cluster, seed), out)
+    elif suffix in PICTURES and how["style"] == "tree":
+        if suffix == ".svg":
+            _export.export_cluster(cluster, out)
+        else:
+            from .tree_picture import draw_tree  # here: only a tree's picture needs it
+
+            draw_tree(cluster, out, seed=seed, **how["picture"])
+    elif suffix in PICTURES:
+        draw_cluster(cluster.points, cluster.params, out, seed=seed, status=cluster.status, **how["picture"])
+    else:
+        _export.export_cluster(cluster, out, mesh=how["mesh"])
+
+
+def _export_cluster(args) -> int:
+    out = args.output
+    how = _output(args, out)
+    _check_dataset(args.dataset)
+    _check_writable(out)
+    _check_new(out, args.force)
+    with store.open_sweep(args.dataset) as ds:
+        count = ds.sizes.get("cluster", 0)
+        if not 0 <= args.cluster < count:
+            raise UsageError(f"--cluster: {args.cluster} is not in [0, {count - 1}]" if count else
+                             f"--cluster: {args.dataset} stores no cluster")
+        cluster = store.read_cluster(ds, args.cluster)
+        seed = int(ds["cluster_seed"].values[args.cluster])
+    suffix = out.suffix.lower()
+    tree = suffix == ".csv" or (suffix in PICTURES and how["style"] == "tree") or (suffix in MESH_FILES
+                                                                                  and how["mesh"] == "tubes")
+    if tree and cluster.parents is None:
+        raise UsageError(f"{args.dataset}: holds no parents (written before dlasweep stored them); "
+                         f"{out.suffix} needs them")
+    _write_cluster(cluster, out, seed, how)
+    print(f"{out}: cluster {args.cluster}, {cluster.n} particles")
+    return 0
+
+
 def _option(name, param) -> dict:
     """``metavar`` and ``help`` of a model parameter's option, from its row of ``params.PARAMETERS``."""
     default = f"Default: {_params.shown_default(name)}."
@@ -175,8 +263,7 @@ def _option(name, param) -> dict:
 
 def _grow(args) -> int:
     out = args.output
-    if out.suffix.lower() not in GROW_SUFFIXES:
-        raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
+    how = _output(args, out)
     _check_writable(out)
     _check_new(out, args.force)
     if not 1 <= args.n <= MAX_PARTICLES:
@@ -190,25 +277,12 @@ def _grow(args) -> int:
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
         raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
-    picture = {"inches": DEFAULT_INCHES if args.size_inches is None else args.size_inches, "dpi": args.dpi}
-    if out.suffix.lower() == ".nc" and (args.size_inches, args.dpi) != (None, None):
-        raise UsageError(f"{'--dpi' if args.size_inches is None else '--size-inches'}: applies to pictures "
-                         f"(.png, .svg), not to {out}")
-    try:
-        check_size(**picture)
-    except ValueError as err:
-        name, _, reason = str(err).partition(":")  # the message starts with the argument's name
-        raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
-
     with _growth_bar(args.n, resolved["model"]) as bar:
         progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
         cluster = grow(args.n, args.seed, progress=progress, **resolved)
     if cluster.status != "ok":
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
-    if out.suffix.lower() == ".nc":
-        store.save(store.cluster_dataset(cluster, args.seed), out)
-    else:
-        draw_cluster(cluster.points, cluster.params, out, seed=args.seed, status=cluster.status, **picture)
+    _write_cluster(cluster, out, args.seed, how)
     print(f"{out}: {cluster.n} particles")
     return 0
 

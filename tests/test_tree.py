@@ -118,6 +118,6 @@ def test_ten_million_particles_take_no_recursion_and_little_time():
     tree.branching(parents[:10])  # compiled
     start = time.perf_counter()
     result = tree.branching(parents)
-    assert time.perf_counter() - start < 30  # about a second on a shared 2-core machine
+    assert time.perf_counter() - start < 30  # 4 s on a shared 2-core machine
     np.testing.assert_array_equal(result["branch_counts"], [1])
     assert result["max_generation"] == n - 1 and sys.getrecursionlimit() == limit
