@@ -9,7 +9,7 @@ from conftest import TINY_SPEC
 from test_sweep import Interrupt, batches_of, interrupt_after
 
 import dlasweep as dla
-from dlasweep import store, sweep
+from dlasweep import branching, store, sweep
 from dlasweep.analysis import growth_counts
 from dlasweep.fit import fit_mass_radius
 from dlasweep.measure import radius_of_gyration
@@ -20,8 +20,9 @@ PER_PARTICLE = ("x", "y", "diffusion_time", "parent", "cluster_particles")
 """The variables of the stored clusters; everything else is measured for every cluster."""
 
 NOT_CURVES = ("diffusion_density", "diffusion_median", "diffusion_bin", "cluster_index", "seconds_per_particle",
-              "pareto")
-"""Summary variables from the stored clusters only, or from timings (the cost on the Pareto front)."""
+              "pareto", *branching.ATTRS, "order")
+"""Summary variables from the stored clusters only (the branch statistics none without them), or from timings
+(the cost on the Pareto front)."""
 
 
 def spec_storing(value):
@@ -63,7 +64,8 @@ def test_positions_of_the_first_k_seeds_only_and_every_curve(value, kept, every,
         np.testing.assert_array_equal(times, all_of_them[key][1])
     # The headline, the per-cluster fits and the curves do not depend on what is stored.
     s = dla.summarise(ds)
-    xr.testing.assert_identical(s.drop_vars(NOT_CURVES), summary.drop_vars(NOT_CURVES))
+    xr.testing.assert_identical(s.drop_vars(NOT_CURVES, errors="ignore"), summary.drop_vars(NOT_CURVES))
+    assert ("bifurcation_ratio" in s) == (kept > 0)
     assert np.isfinite(s["diffusion_density"].values).any() == (kept > 0)
     # In memory, the same.
     in_memory = dla.run_sweep(spec_storing(value), client=dask_client)

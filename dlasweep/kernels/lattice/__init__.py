@@ -5,7 +5,8 @@
 - ``words``: the bit-packed occupancy of the sites, and exact Chebyshev
   distances a few sites out from whole 64-bit words;
 - ``grow``: the walk from release to contact, attachment, the lockstep
-  walkers, and ``grow_lattice``, the entry point.
+  walkers, and ``grow_lattice``, the entry point;
+- ``parents``: who stuck to whom, found from the sites after growth.
 """
 
 from .exits import exit_tables
