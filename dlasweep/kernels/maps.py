@@ -1,17 +1,18 @@
-"""Bit-packed occupancy grids and hierarchical distance maps (Ossadnik).
+"""Bit-packed occupancy grids, hierarchical maps and distance pyramids (Ossadnik).
 
 A grid covers the cube ``[-off, W - off)^dim`` of unit cells. Segment 0 is a
 plain occupancy bit per cell; segment ``s >= 1`` is a *dilated* map of cells
 of side ``2**s``: a cell is set when a particle lies in it or in one of its
 ``3**dim - 1`` neighbours. A walker whose level-``s`` cell is clear is more
-than ``2**s`` (Chebyshev, so also Euclidean) from every particle, and because
-the dilated sets are nested, the largest clear level is found by a local
-search from the walker's previous level (``free_bound``).
+than ``2**s`` (Chebyshev, so also Euclidean) from every particle.
 
 Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, so a 2D grid costs
-about 1.3 bits per cell in all, and memory follows the cluster, not a canvas.
+about 1.3 bits per cell in all (the lattice keeps segments 0 and 1 only).
 Near the cluster a coarse Chebyshev distance field (``field_*``, one byte per
-4x4 cells) gives a sharper bound than the power-of-two maps.
+4x4 cells) gives a sharper bound than the power-of-two maps; the distance
+pyramid (``pyramid_*``) stacks coarser fields above it, so that a walker far
+from the cluster reads a bound within a cell or two of the truth from a
+small array (the off-lattice walk still searches the maps there).
 """
 
 import sys
@@ -60,11 +61,11 @@ def filled(n, value, dtype):
 
 
 @jit
-def layout(dim, width):
-    """Start word, blocks per axis and cells per axis of every segment."""
+def layout(dim, width, most=64):
+    """Start word, blocks per axis and cells per axis of every segment (at most ``most``)."""
     block = 8 if dim == 2 else 4
     nseg = 1
-    while (width >> nseg) >= 2:
+    while (width >> nseg) >= 2 and nseg < most:
         nseg += 1
     start = np.zeros(nseg + 1, np.int64)
     blocks = np.zeros(nseg, np.int64)
@@ -121,51 +122,10 @@ def mark(words, dim, start, blocks, cells, i, j, k):
 
 
 @jit
-def allocate(dim, width):
-    """An empty grid of side ``width``: (words, start, blocks, cells)."""
-    start, blocks, cells = layout(dim, width)
+def allocate(dim, width, most=64):
+    """An empty grid of side ``width`` with at most ``most`` segments: (words, start, blocks, cells)."""
+    start, blocks, cells = layout(dim, width, most)
     return filled(start[-1], 0, np.uint64), start, blocks, cells
-
-
-@jit
-def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
-    """Largest clear level about cell (i, j, k) and the distance it guarantees.
-
-    The search starts at ``guess`` (a walker's previous level) and moves one
-    level at a time, which beats bisection for walkers that move locally.
-    A clear level ``s`` means no particle in the 3**dim block of level-``s``
-    cells around the walker's, so every particle is at least as far as the
-    nearest face of that block: ``2**s`` plus the walker's offset in its cell.
-
-    Returns
-    -------
-    level : int, 0 when even level 1 is set
-    bound : float, a lower bound on the distance from the centre of cell
-        (i, j, k) to the nearest marked cell (0 when level is 0)
-    """
-    top = len(cells) - 1
-    t = min(max(guess, 1), top)
-    step = 0  # +1 climbing while clear, -1 descending while set
-    s = 0
-    while 1 <= t <= top:
-        # the word is read here, not by a helper taking the array, which
-        # would cost atomic reference counting per level
-        w, b = index(dim, start[t], blocks[t], i >> t, j >> t, k >> t)
-        clear = (words[w] >> np.uint64(b)) & np.uint64(1) == np.uint64(0)
-        if step == 0:
-            step = 1 if clear else -1
-        if clear:
-            s = t
-        if clear == (step < 0):
-            break
-        t += step
-    # one exit: numba then drops the reference counting of the arrays
-    side = 1 << s
-    mask = side - 1
-    near = min(i & mask, side - 1 - (i & mask), j & mask, side - 1 - (j & mask))
-    if dim == 3:
-        near = min(near, k & mask, side - 1 - (k & mask))
-    return s, float(side + near) + 0.5 if s > 0 else 0.0
 
 
 FIELD_SHIFT = 2
@@ -220,7 +180,12 @@ def field_fill(field, dim, width, cap):
     a whole grid costs a few operations per cell instead of ``field_mark``'s
     ``(2 cap - 1)**dim`` per particle, so a rebuild uses this.
     """
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
+    _fill(field, dim, (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT, cap)
+
+
+@jit
+def _fill(field, dim, fw, cap):
+    """``field_fill`` on a field of side ``fw`` coarse cells, whatever their size."""
     nz = fw if dim == 3 else 1
     for sweep in range(2):
         g = 1 - 2 * sweep  # +1 forward, -1 backward
@@ -250,3 +215,119 @@ def field_get(field, dim, width, i, j, k):
     fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
     ck = k >> FIELD_SHIFT if dim == 3 else 0
     return np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])
+
+
+PYRAMID_STEP = (0, 0, 2, 1)
+"""By dimension: each level of the distance pyramid has cells ``2**PYRAMID_STEP``
+times wider than the level below; level 0 is the field (cells of
+``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps."""
+
+
+@jit
+def pyramid_starts(dim, width, cap):
+    """Where each level of the pyramid of a grid of side ``width`` starts in
+    its array (and the end): enough levels that the top one's capped distance
+    spans the grid."""
+    levels = 1
+    while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width:
+        levels += 1
+    start = np.zeros(levels + 1, np.int64)
+    for level in range(levels):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        start[level + 1] = start[level] + ((width + (1 << shift) - 1) >> shift) ** dim
+    return start
+
+
+@jit
+def pyramid_allocate(dim, width, cap):
+    """The field with coarser fields above it, one array, every cell at the cap.
+
+    Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
+    starts at ``pyramid_starts(...)[l]``; level 0 is ``field_allocate``'s, so
+    ``field_get`` reads the pyramid as it reads a field.
+    """
+    return filled(pyramid_starts(dim, width, cap)[-1], cap, np.uint8)
+
+
+@jit
+def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach):
+    """Record a particle in cell (i, j, k) on every level: lower the distances
+    within ``reach`` (the cap, or 1 to mark only the particle's own cells for
+    ``pyramid_fill``). A level whose cell already holds a particle has every
+    coarser one marked too."""
+    start = pyramid_starts(dim, width, cap)
+    for level in range(len(start) - 1):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        fw = (width + (1 << shift) - 1) >> shift
+        ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
+        if pyramid[start[level] + ci + fw * (cj + fw * ck)] == 0:
+            break
+        field_lower(pyramid[start[level]:start[level + 1]], dim, fw, reach, ci, cj, ck)
+
+
+@jit
+def pyramid_fill(pyramid, dim, width, cap):
+    """``field_fill`` on every level of the pyramid."""
+    start = pyramid_starts(dim, width, cap)
+    for level in range(len(start) - 1):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        _fill(pyramid[start[level]:start[level + 1]], dim, (width + (1 << shift) - 1) >> shift, cap)
+
+
+@jit
+def pyramid_low(dim, cap):
+    """The smallest value of a level ``l >= 1`` that makes it the sharpest:
+    the level below is then at its cap, and bounds less."""
+    return (cap - 2) // (1 << PYRAMID_STEP[dim]) + 2
+
+
+@jit
+def pyramid_find(pyramid, start, dim, width, i, j, k, low, guess):
+    """The level of the pyramid that bounds the distance from cell (i, j, k)
+    best, and its value there, searched from level ``guess``.
+
+    A level's value v (cells, capped) puts every particle ``(v - 1) * side + 1``
+    sites or more away, Chebyshev. Values rise towards the finer levels, and
+    a level at ``low`` or more bounds at least as well as every finer one
+    (``pyramid_low``), so the answer is the coarsest level at ``low`` or more
+    (level 0 when none is). Walkers move locally: from the previous answer
+    the search takes a read or two, and the coarse levels it reads for a
+    walker far from the cluster are small enough to stay in cache.
+
+    Returns
+    -------
+    level : int
+    value : int
+    """
+    top = len(start) - 2
+    level = min(guess, top)
+    value = _level_value(pyramid, start, dim, width, level, i, j, k)
+    if value >= low:
+        while level < top:
+            up = _level_value(pyramid, start, dim, width, level + 1, i, j, k)
+            if up < low:
+                break
+            level += 1
+            value = up
+    else:
+        while level > 0 and value < low:
+            level -= 1
+            value = _level_value(pyramid, start, dim, width, level, i, j, k)
+    return level, value
+
+
+@jit
+def pyramid_bound(dim, level, value):
+    """The Chebyshev distance in sites that ``value`` (at least 1) at ``level``
+    guarantees from a cell to every particle: ``value - 1`` whole cells
+    between, plus one site. (Adding the walker's way to its own cell's face,
+    measured: 8% more steps a particle at 1e6 in 2D, not fewer.)"""
+    return ((value - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * level)) + 1
+
+
+@jit
+def _level_value(pyramid, start, dim, width, level, i, j, k):
+    shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+    fw = (width + (1 << shift) - 1) >> shift
+    ck = k >> shift if dim == 3 else 0
+    return np.int64(pyramid[start[level] + (i >> shift) + fw * ((j >> shift) + fw * ck)])

@@ -2,7 +2,8 @@
 exact Chebyshev distances a few sites out from whole 64-bit words.
 
 The grid is ``maps``' (segment 0 a bit per site, 8x8 or 4x4x4 sites per
-word, then the dilated levels) with a coarse distance field beside it; a
+word, then dilated level 1, which tells a walker within two sites) with the
+distance pyramid beside it (``maps.pyramid_*``); a
 site q of the lattice is cell q + ``off`` of the grid, whose side is
 ``width``. A substrate's periodic images are marked too.
 """
@@ -19,8 +20,8 @@ FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, i
 def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
     """Mark a particle at site q, with its periodic images for substrates.
 
-    ``cap`` 1 marks only the particle's own cell of the field (for
-    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``.
+    ``cap`` 1 marks only the particle's own cells of the distance pyramid
+    (for ``maps.pyramid_fill`` to complete), else ``FIELD_CAP[dim]``.
     """
     reach = 1 if period > 0 else 0
     zreach = reach if dim == 3 else 0
@@ -31,19 +32,19 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
             k = q[2] + off
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 maps.mark(words, dim, start, blocks, cells, i, j, k)
-                maps.field_mark(field, dim, width, i, j, k, cap)
+                maps.pyramid_mark(field, dim, width, i, j, k, FIELD_CAP[dim], cap)
 
 
 @jit
 def rebuild(points, count, dim, width, off, period):
-    words, start, blocks, cells = maps.allocate(dim, width)
-    field = maps.field_allocate(dim, width, FIELD_CAP[dim])
+    words, start, blocks, cells = maps.allocate(dim, width, 2)  # occupancy and level 1: the near test
+    field = maps.pyramid_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
     for p in range(count):
         for a in range(dim):
             q[a] = points[p, a]
         mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
-    maps.field_fill(field, dim, width, FIELD_CAP[dim])
+    maps.pyramid_fill(field, dim, width, FIELD_CAP[dim])
     return words, start, blocks, cells, field
 
 
