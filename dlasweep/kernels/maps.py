@@ -224,12 +224,12 @@ times wider than the level below; level 0 is the field (cells of
 
 
 @jit
-def pyramid_starts(dim, width, cap):
+def pyramid_starts(dim, width, cap, most=64):
     """Where each level of the pyramid of a grid of side ``width`` starts in
     its array (and the end): enough levels that the top one's capped distance
-    spans the grid."""
+    spans the grid, at most ``most``."""
     levels = 1
-    while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width:
+    while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width and levels < most:
         levels += 1
     start = np.zeros(levels + 1, np.int64)
     for level in range(levels):
@@ -239,23 +239,23 @@ def pyramid_starts(dim, width, cap):
 
 
 @jit
-def pyramid_allocate(dim, width, cap):
+def pyramid_allocate(dim, width, cap, most=64):
     """The field with coarser fields above it, one array, every cell at the cap.
 
     Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
     starts at ``pyramid_starts(...)[l]``; level 0 is ``field_allocate``'s, so
     ``field_get`` reads the pyramid as it reads a field.
     """
-    return filled(pyramid_starts(dim, width, cap)[-1], cap, np.uint8)
+    return filled(pyramid_starts(dim, width, cap, most)[-1], cap, np.uint8)
 
 
 @jit
-def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach):
+def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
     """Record a particle in cell (i, j, k) on every level: lower the distances
     within ``reach`` (the cap, or 1 to mark only the particle's own cells for
     ``pyramid_fill``). A level whose cell already holds a particle has every
     coarser one marked too."""
-    start = pyramid_starts(dim, width, cap)
+    start = pyramid_starts(dim, width, cap, most)
     for level in range(len(start) - 1):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         fw = (width + (1 << shift) - 1) >> shift
