@@ -60,9 +60,17 @@ def filled(n, value, dtype):
     return a
 
 
+TILE_BITS = (0, 0, 4, 3)
+"""By dimension: words are stored in tiles of ``2**TILE_BITS`` words a side
+(2D 16x16 words, 128x128 sites, 2 KiB; 3D 8x8x8 words, 32**3 sites, 4 KiB),
+so that the words near a site share a few memory pages and a cluster
+touches the pages along it, not every row of the grid."""
+
+
 @jit
 def layout(dim, width, most=64):
-    """Start word, blocks per axis and cells per axis of every segment (at most ``most``)."""
+    """Start word, blocks per axis and cells per axis of every segment (at most ``most``),
+    each segment a whole number of tiles."""
     block = 8 if dim == 2 else 4
     nseg = 1
     while (width >> nseg) >= 2 and nseg < most:
@@ -75,16 +83,30 @@ def layout(dim, width, most=64):
         nb = (w + block - 1) // block
         cells[s] = w
         blocks[s] = nb
-        start[s + 1] = start[s] + nb**dim
+        tiles = (nb + (1 << TILE_BITS[dim]) - 1) >> TILE_BITS[dim]
+        start[s + 1] = start[s] + (tiles << TILE_BITS[dim]) ** dim
     return start, blocks, cells
+
+
+@jit
+def block_word(dim, base, nb, bx, by, bz):
+    """The word holding block (bx, by, bz) of a segment starting at ``base``, ``nb`` blocks a side."""
+    t = TILE_BITS[dim]
+    last = (1 << t) - 1
+    tiles = (nb + last) >> t
+    tile = (bx >> t) + tiles * ((by >> t) + (tiles * (bz >> t) if dim == 3 else 0))
+    inner = (bx & last) | ((by & last) << t)
+    if dim == 3:
+        inner |= (bz & last) << (2 * t)
+    return base + (tile << (dim * t)) + inner
 
 
 @jit
 def index(dim, base, nb, i, j, k):
     """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side."""
     if dim == 2:
-        return base + (i >> 3) + nb * (j >> 3), (i & 7) | ((j & 7) << 3)
-    return base + (i >> 2) + nb * ((j >> 2) + nb * (k >> 2)), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
+        return block_word(2, base, nb, i >> 3, j >> 3, 0), (i & 7) | ((j & 7) << 3)
+    return block_word(3, base, nb, i >> 2, j >> 2, k >> 2), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
 
 
 @jit

@@ -429,11 +429,11 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                 elif dim == 2:
                     bx, by = i >> 3, j >> 3
                     d = fine2(
-                        word_at(words, nb0, bx - 1, by - 1, 0), word_at(words, nb0, bx, by - 1, 0),
-                        word_at(words, nb0, bx + 1, by - 1, 0), word_at(words, nb0, bx - 1, by, 0),
-                        words[bx + nb0 * by], word_at(words, nb0, bx + 1, by, 0),
-                        word_at(words, nb0, bx - 1, by + 1, 0), word_at(words, nb0, bx, by + 1, 0),
-                        word_at(words, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
+                        word_at(words, 2, nb0, bx - 1, by - 1, 0), word_at(words, 2, nb0, bx, by - 1, 0),
+                        word_at(words, 2, nb0, bx + 1, by - 1, 0), word_at(words, 2, nb0, bx - 1, by, 0),
+                        words[maps.block_word(2, 0, nb0, bx, by, 0)], word_at(words, 2, nb0, bx + 1, by, 0),
+                        word_at(words, 2, nb0, bx - 1, by + 1, 0), word_at(words, 2, nb0, bx, by + 1, 0),
+                        word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                     )
                 else:
                     d = fine3(words, nb0, i, j, k, cube)

@@ -97,10 +97,10 @@ def _row2(w0, w1, w2, t):
 
 
 @jit
-def word_at(words, nb, x, y, z):
+def word_at(words, dim, nb, x, y, z):
     """Word (x, y, z) of the occupancy segment, empty outside the grid."""
     inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
-    return words[x + nb * (y + nb * z)] if inside else np.uint64(0)
+    return words[maps.block_word(dim, 0, nb, x, y, z)] if inside else np.uint64(0)
 
 
 @jit
@@ -165,10 +165,12 @@ def fine3(words, nb, i, j, k, cube):
     any_set = np.uint64(0)
     for c in range(3):
         for b in range(3):
-            row = bx - 1 + nb * (by + b - 1 + nb * (bz + c - 1))
             for a in range(3):
                 # away from the grid's faces, no bounds to check
-                w = words[row + a] if inside else word_at(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+                if inside:
+                    w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
+                else:
+                    w = word_at(words, 3, nb, bx + a - 1, by + b - 1, bz + c - 1)
                 cube[a + 3 * (b + 3 * c)] = w
                 any_set |= w
     if any_set == 0:
