@@ -1,5 +1,7 @@
 """The lattice kernel's exact machinery: square/cube exit laws and their alias tables."""
 
+import sys
+
 import naive
 import numpy as np
 import pytest
@@ -133,27 +135,43 @@ def test_maps_match_brute_force(dim, width):
                 assert maps.test(words, dim, start, blocks, s, *q) == dil[c]
 
 
-@pytest.mark.parametrize("dim, width, cap", [(2, 96, 16), (3, 48, 6)])
-def test_field_fill_matches_field_mark(dim, width, cap):
-    """Seeds plus the two-pass fill give the field that per-particle marking gives."""
-    rng = np.random.default_rng(2)
-    for density in (0.0001, 0.001, 0.01):
-        pts = _random_points(rng, dim, width, density)
-        marked = maps.field_allocate(dim, width, cap)
-        filled = maps.field_allocate(dim, width, cap)
-        for p in pts:
-            maps.field_mark(marked, dim, width, *p, cap)
-            maps.field_mark(filled, dim, width, *p, 1)
-        maps.field_fill(filled, dim, width, cap)
-        assert (marked == filled).all()
-
-
 @pytest.mark.parametrize("n, value, dtype", [(5, 7, np.uint8), (3 << 20, -1, np.int32), (1 << 20, 2.5, np.float64)])
 def test_filled_is_np_full(n, value, dtype):
     """``maps.filled`` (huge-page advice for large arrays) gives ``np.full``'s array, small or large."""
     a = maps.filled(n, value, dtype)
     assert a.dtype == dtype and a.shape == (n,)
     assert np.array_equal(a, np.full(n, value, dtype))
+
+
+@pytest.mark.parametrize("n, dtype", [(3, np.uint64), (1000, np.uint8), (3 << 20, np.uint64), ((5 << 20) + 3, np.uint8)])
+def test_zeroed_is_np_zeros_even_where_the_heap_held_other_values(n, dtype):
+    """``maps.zeroed`` gives zeros, small or large, also in memory the
+    allocator hands out again after an array of other values was freed."""
+    for _ in range(3):
+        junk = maps.filled(n, 7, dtype)
+        del junk
+        a = maps.zeroed(n, dtype)
+        assert a.dtype == dtype and a.shape == (n,)
+        assert not a.any()
+
+
+def _resident_mb():
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmRSS")) / 1024
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="pages handed back to the OS: Linux's madvise")
+def test_zeroed_takes_memory_only_where_written():
+    """256 MiB zeroed, read whole, add little to the resident memory; writing
+    one word in every 16th page adds about 1/16 of it."""
+    before = _resident_mb()
+    a = maps.zeroed(32 << 20, np.uint64)
+    assert a.sum() == 0
+    read = _resident_mb() - before
+    a[:: 16 * maps.PAGE // 8] = 1
+    written = _resident_mb() - before
+    assert read < 8
+    assert 12 < written < 24
 
 
 def _level_distances(pts, dim, width, shift, cap):

@@ -6,13 +6,15 @@ of side ``2**s``: a cell is set when a particle lies in it or in one of its
 ``3**dim - 1`` neighbours. A walker whose level-``s`` cell is clear is more
 than ``2**s`` (Chebyshev, so also Euclidean) from every particle.
 
-Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, so a 2D grid costs
-about 1.3 bits per cell in all (the lattice keeps segments 0 and 1 only).
-Near the cluster a coarse Chebyshev distance field (``field_*``, one byte per
-4x4 cells) gives a sharper bound than the power-of-two maps; the distance
-pyramid (``pyramid_*``) stacks coarser fields above it, so that a walker far
-from the cluster reads a bound within a cell or two of the truth from a
-small array (the off-lattice walk still searches the maps there).
+Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, words in square
+tiles (``TILE_BITS``), and a grid's pages take memory only once written
+(``zeroed``): a 2D grid costs 1.3 bits per cell of the pages along the
+cluster (the lattice keeps segments 0 and 1 only), not of its bounding square.
+Near the cluster a coarse Chebyshev distance field (one byte per 4x4 cells)
+gives a sharper bound than the power-of-two maps; the distance pyramid
+(``pyramid_*``) stacks coarser fields above it, so that a walker far from the
+cluster reads a bound within a cell or two of the truth from a small array
+(beside periodic sides the off-lattice walk searches the maps instead).
 """
 
 import sys
@@ -44,6 +46,31 @@ def _no_advice(address, nbytes):
 
 _advise = _advise_huge_pages if sys.platform.startswith("linux") else _no_advice
 
+PAGE = 4096
+"""The memory page that ``zeroed`` hands back to the OS (x86-64 Linux; where pages are larger,
+``madvise`` refuses the unaligned range and ``zeroed`` writes its zeros)."""
+_MADV_DONTNEED = 4
+
+
+@jit
+def _release(address, nbytes):
+    """Hand the whole pages in [address, address + nbytes) back to Linux: they read
+    as zeros and take no memory until written. Returns the released range."""
+    lo = (address + np.uintp(PAGE - 1)) & ~np.uintp(PAGE - 1)
+    hi = (address + np.uintp(nbytes)) & ~np.uintp(PAGE - 1)
+    if hi > lo and _madvise(lo, hi - lo, np.int32(_MADV_DONTNEED)) == 0:
+        return lo - address, hi - address
+    return np.uintp(0), np.uintp(0)
+
+
+@jit
+def _keep(address, nbytes):
+    """Elsewhere than Linux: nothing released."""
+    return np.uintp(0), np.uintp(0)
+
+
+_release_pages = _release if sys.platform.startswith("linux") else _keep
+
 
 @jit
 def filled(n, value, dtype):
@@ -65,6 +92,26 @@ TILE_BITS = (0, 0, 4, 3)
 (2D 16x16 words, 128x128 sites, 2 KiB; 3D 8x8x8 words, 32**3 sites, 4 KiB),
 so that the words near a site share a few memory pages and a cluster
 touches the pages along it, not every row of the grid."""
+
+
+@jit
+def zeroed(n, dtype):
+    """``np.zeros(n, dtype)`` whose pages take memory only once written.
+
+    numba's ``np.zeros`` writes every byte. Here the whole pages go back to
+    the OS (``madvise(MADV_DONTNEED)``), which maps them to zeros on demand:
+    a grid over the cluster's bounding square costs the pages the cluster
+    and its walkers write, not the square.
+    """
+    a = np.empty(n, dtype)
+    lo, hi = _release_pages(np.uintp(a.ctypes.data), np.uintp(a.nbytes))
+    if hi > lo:
+        b = a.view(np.uint8)
+        b[:lo] = 0
+        b[hi:] = 0
+    else:
+        a[:] = 0
+    return a
 
 
 @jit
@@ -147,32 +194,11 @@ def mark(words, dim, start, blocks, cells, i, j, k):
 def allocate(dim, width, most=64):
     """An empty grid of side ``width`` with at most ``most`` segments: (words, start, blocks, cells)."""
     start, blocks, cells = layout(dim, width, most)
-    return filled(start[-1], 0, np.uint64), start, blocks, cells
+    return zeroed(start[-1], np.uint64), start, blocks, cells
 
 
 FIELD_SHIFT = 2
 """The distance field works on coarse cells of side ``2**FIELD_SHIFT``."""
-
-
-@jit
-def field_allocate(dim, width, cap):
-    """A coarse Chebyshev distance field, every cell at the cap (nothing near)."""
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    return filled(fw**dim, cap, np.uint8)
-
-
-@jit
-def field_mark(field, dim, width, i, j, k, cap):
-    """Record a particle in cell (i, j, k): lower the distances within ``cap``.
-
-    ``field[c]`` is the Chebyshev distance, in coarse cells and capped, from
-    cell ``c`` to the nearest coarse cell holding a particle; sharper than the
-    dilated maps near the cluster, where most jumps happen.
-    """
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    ci, cj, ck = i >> FIELD_SHIFT, j >> FIELD_SHIFT, (k >> FIELD_SHIFT if dim == 3 else 0)
-    if field[ci + fw * (cj + fw * ck)] != 0:
-        field_lower(field, dim, fw, cap, ci, cj, ck)
 
 
 @jit
@@ -194,20 +220,15 @@ def field_lower(field, dim, fw, cap, ci, cj, ck):
 
 
 @jit
-def field_fill(field, dim, width, cap):
-    """Fill in the field's distances from its zero cells (the rest at ``cap``).
+def _fill(field, dim, fw, cap):
+    """Fill in the distances of a field of side ``fw`` cells from its zero
+    cells (the rest at ``cap``).
 
     Two raster passes, each taking the minimum over the half of the
     3**dim - 1 neighbours already visited, give the exact Chebyshev distance;
-    a whole grid costs a few operations per cell instead of ``field_mark``'s
+    a whole grid costs a few operations per cell instead of ``field_lower``'s
     ``(2 cap - 1)**dim`` per particle, so a rebuild uses this.
     """
-    _fill(field, dim, (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT, cap)
-
-
-@jit
-def _fill(field, dim, fw, cap):
-    """``field_fill`` on a field of side ``fw`` coarse cells, whatever their size."""
     nz = fw if dim == 3 else 1
     for sweep in range(2):
         g = 1 - 2 * sweep  # +1 forward, -1 backward
@@ -229,14 +250,6 @@ def _fill(field, dim, fw, cap):
                                 if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
                                     v = min(v, np.int64(field[n0 + fw * (n1 + fw * n2)]) + 1)
                     field[here] = min(v, cap)
-
-
-@jit
-def field_get(field, dim, width, i, j, k):
-    """The field's value at site (i, j, k): coarse cells to the nearest particle's, capped."""
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    ck = k >> FIELD_SHIFT if dim == 3 else 0
-    return np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])
 
 
 PYRAMID_STEP = (0, 0, 2, 1)
@@ -265,8 +278,7 @@ def pyramid_allocate(dim, width, cap, most=64):
     """The field with coarser fields above it, one array, every cell at the cap.
 
     Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
-    starts at ``pyramid_starts(...)[l]``; level 0 is ``field_allocate``'s, so
-    ``field_get`` reads the pyramid as it reads a field.
+    starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
     """
     return filled(pyramid_starts(dim, width, cap, most)[-1], cap, np.uint8)
 
@@ -289,7 +301,7 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
 
 @jit
 def pyramid_fill(pyramid, dim, width, cap):
-    """``field_fill`` on every level of the pyramid."""
+    """``_fill`` on every level of the pyramid."""
     start = pyramid_starts(dim, width, cap)
     for level in range(len(start) - 1):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
