@@ -291,7 +291,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     occupied = np.unique(unit[((unit >= 0) & (unit < W)).all(1)] // fs, axis=0)
     cellsxyz = np.stack(np.meshgrid(*[np.arange(fw)] * dim, indexing="ij"), -1).reshape(-1, dim)
     cheb = np.minimum(cKDTree(occupied).query(cellsxyz, p=np.inf)[0], cap)
-    got = field[:fw**dim].reshape((fw,) * dim).transpose(*range(dim)[::-1]).reshape(-1)  # index a + fw*(b + fw*c)
+    got = naive.field_distances(field, dim, fw, cap).reshape(-1)
     np.testing.assert_array_equal(got, cheb)
     # the bound against the nearest centre, at random points near and far
     spread = rng.choice([15.0, 60.0], (4000, 1))

@@ -199,35 +199,62 @@ def allocate(dim, width, most=64):
 
 FIELD_SHIFT = 2
 """The distance field works on coarse cells of side ``2**FIELD_SHIFT``."""
+FIELD_TILE = (0, 0, 6, 4)
+"""By dimension: a field's cells are stored in tiles of ``2**FIELD_TILE`` cells
+a side, 4 KiB each (a memory page), so that the cells within a cap of the
+cluster share pages and the rest are never written."""
 
 
 @jit
-def field_lower(field, dim, fw, cap, ci, cj, ck):
-    """Lower the distances within ``cap`` about a particle in coarse cell (ci, cj, ck).
+def field_cell(dim, fw, ci, cj, ck):
+    """Index of cell (ci, cj, ck) in a field of ``fw`` cells a side, stored by tiles."""
+    t = FIELD_TILE[dim]
+    last = (1 << t) - 1
+    tiles = (fw + last) >> t
+    tile = (ci >> t) + tiles * ((cj >> t) + (tiles * (ck >> t) if dim == 3 else 0))
+    inner = (ci & last) | ((cj & last) << t)
+    if dim == 3:
+        inner |= (ck & last) << (2 * t)
+    return (tile << (dim * t)) + inner
 
-    ``fw`` is the field's side in coarse cells.
+
+@jit
+def field_size(dim, fw):
+    """Cells a field of ``fw`` cells a side holds, whole tiles."""
+    t = FIELD_TILE[dim]
+    return (((fw + (1 << t) - 1) >> t) << t) ** dim
+
+
+@jit
+def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
+    """Lower the distances within ``reach`` (at most ``cap``) about a particle in cell (ci, cj, ck).
+
+    A field stores ``cap - distance``: zero is the cap, so a page that no
+    particle came within reach of is never written and takes no memory.
     """
-    reach = cap - 1
+    reach -= 1
     klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
     for c in range(klo, khi + 1):
         dk = abs(c - ck)
         for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
             dj = max(dk, abs(b - cj))
-            row = fw * (b + fw * c)
-            # branchless, so that the compiler vectorises the row
             for a in range(max(ci - reach, 0), min(ci + reach, fw - 1) + 1):
-                field[row + a] = min(field[row + a], np.uint8(max(dj, abs(a - ci))))
+                here = field_cell(dim, fw, a, b, c)
+                near = np.uint8(cap - max(dj, abs(a - ci)))
+                if field[here] < near:
+                    field[here] = near
 
 
 @jit
 def _fill(field, dim, fw, cap):
     """Fill in the distances of a field of side ``fw`` cells from its zero
-    cells (the rest at ``cap``).
+    cells (the rest at ``cap``), stored as ``field_lower`` stores them.
 
     Two raster passes, each taking the minimum over the half of the
     3**dim - 1 neighbours already visited, give the exact Chebyshev distance;
     a whole grid costs a few operations per cell instead of ``field_lower``'s
-    ``(2 cap - 1)**dim`` per particle, so a rebuild uses this.
+    ``(2 cap - 1)**dim`` per particle, so a rebuild uses this. Only cells
+    within the cap are written.
     """
     nz = fw if dim == 3 else 1
     for sweep in range(2):
@@ -238,9 +265,9 @@ def _fill(field, dim, fw, cap):
                 b = bb if g > 0 else fw - 1 - bb
                 for aa in range(fw):
                     a = aa if g > 0 else fw - 1 - aa
-                    here = a + fw * (b + fw * c)
-                    v = np.int64(field[here])
-                    if v == 0:
+                    here = field_cell(dim, fw, a, b, c)
+                    u = np.int64(field[here])
+                    if u == cap:
                         continue
                     # neighbours (dc, db, da) before this cell in the pass's order
                     for dc in range(-1 if dim == 3 else 0, 1):
@@ -248,8 +275,9 @@ def _fill(field, dim, fw, cap):
                             for da in range(-1, 2 if dc < 0 or db < 0 else 0):
                                 n0, n1, n2 = a + g * da, b + g * db, c + g * dc
                                 if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
-                                    v = min(v, np.int64(field[n0 + fw * (n1 + fw * n2)]) + 1)
-                    field[here] = min(v, cap)
+                                    u = max(u, np.int64(field[field_cell(dim, fw, n0, n1, n2)]) - 1)
+                    if u > field[here]:
+                        field[here] = u
 
 
 PYRAMID_STEP = (0, 0, 2, 1)
@@ -269,7 +297,7 @@ def pyramid_starts(dim, width, cap, most=64):
     start = np.zeros(levels + 1, np.int64)
     for level in range(levels):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
-        start[level + 1] = start[level] + ((width + (1 << shift) - 1) >> shift) ** dim
+        start[level + 1] = start[level] + field_size(dim, (width + (1 << shift) - 1) >> shift)
     return start
 
 
@@ -280,7 +308,7 @@ def pyramid_allocate(dim, width, cap, most=64):
     Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
     starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
     """
-    return filled(pyramid_starts(dim, width, cap, most)[-1], cap, np.uint8)
+    return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)
 
 
 @jit
@@ -294,9 +322,9 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         fw = (width + (1 << shift) - 1) >> shift
         ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
-        if pyramid[start[level] + ci + fw * (cj + fw * ck)] == 0:
+        if pyramid[start[level] + field_cell(dim, fw, ci, cj, ck)] == cap:
             break
-        field_lower(pyramid[start[level]:start[level + 1]], dim, fw, reach, ci, cj, ck)
+        field_lower(pyramid[start[level]:start[level + 1]], dim, fw, cap, reach, ci, cj, ck)
 
 
 @jit
@@ -316,7 +344,7 @@ def pyramid_low(dim, cap):
 
 
 @jit
-def pyramid_find(pyramid, start, dim, width, i, j, k, low, guess):
+def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
     """The level of the pyramid that bounds the distance from cell (i, j, k)
     best, and its value there, searched from level ``guess``.
 
@@ -335,10 +363,10 @@ def pyramid_find(pyramid, start, dim, width, i, j, k, low, guess):
     """
     top = len(start) - 2
     level = min(guess, top)
-    value = _level_value(pyramid, start, dim, width, level, i, j, k)
+    value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
     if value >= low:
         while level < top:
-            up = _level_value(pyramid, start, dim, width, level + 1, i, j, k)
+            up = _level_value(pyramid, start, dim, width, cap, level + 1, i, j, k)
             if up < low:
                 break
             level += 1
@@ -346,7 +374,7 @@ def pyramid_find(pyramid, start, dim, width, i, j, k, low, guess):
     else:
         while level > 0 and value < low:
             level -= 1
-            value = _level_value(pyramid, start, dim, width, level, i, j, k)
+            value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
     return level, value
 
 
@@ -360,8 +388,8 @@ def pyramid_bound(dim, level, value):
 
 
 @jit
-def _level_value(pyramid, start, dim, width, level, i, j, k):
+def _level_value(pyramid, start, dim, width, cap, level, i, j, k):
     shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
     fw = (width + (1 << shift) - 1) >> shift
     ck = k >> shift if dim == 3 else 0
-    return np.int64(pyramid[start[level] + (i >> shift) + fw * ((j >> shift) + fw * ck)])
+    return cap - np.int64(pyramid[start[level] + field_cell(dim, fw, i >> shift, j >> shift, ck)])

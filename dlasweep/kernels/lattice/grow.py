@@ -275,7 +275,8 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     top = TABLE_MAX[dim]
     group = 8 if dim == 2 else 48  # symmetries of the square (cube)
     rounding = 0.5 * np.sqrt(dim)  # how far a site can be from the point it rounds
-    low = maps.pyramid_low(dim, FIELD_CAP[dim])
+    cap = FIELD_CAP[dim]
+    low = maps.pyramid_low(dim, cap)
     levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
     level = 0  # the pyramid's level that bounded the walker's distance last
     nb0, base1, nb1 = blocks[0], start[1], blocks[1]
@@ -375,7 +376,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
             near = False
             if ingrid:
-                level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, low, level)
+                level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
                 if level == 0 and cell <= 1:
                     # a set level-1 cell: a particle may lie within two sites
                     cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)

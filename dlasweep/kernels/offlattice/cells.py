@@ -131,7 +131,7 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
                 # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
                 fw = (W + (1 << FS) - 1) >> FS
                 ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
-                fresh = field[ci + fw * (cj + fw * ck)] != 0
+                fresh = field[maps.field_cell(dim, fw, ci, cj, ck)] != gi[17]
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
                 if fresh:
                     maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[17], gi[17], gi[18])
@@ -229,7 +229,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
     fw = (W + (1 << FS) - 1) >> FS
-    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+    fd = gi[17] - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
     dm = 0.0
     if fd > 1:
         side = float(1 << FS)
@@ -239,7 +239,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         return dm
     if fd >= gi[17] and gi[18] > 1:
         pstart = maps.pyramid_starts(dim, W, gi[17], gi[18])
-        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, maps.pyramid_low(dim, gi[17])))
+        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[17], maps.pyramid_low(dim, gi[17])))
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
     lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
@@ -278,12 +278,12 @@ def walk_geometry(gi, cells, dim):
 
 
 @jit
-def pyramid_dist(field, pstart, dim, W, X0, X1, X2, low):
+def pyramid_dist(field, pstart, dim, W, X0, X1, X2, cap, low):
     """Lower bound on the centre distance from grid point X to every particle
     from the distance pyramid's levels above the field, 0 when none bounds
     more than the field: every centre lies ``value - 1`` whole cells of the
     level beyond X's own, plus X's way to its cell's nearest face."""
-    level, value = maps.pyramid_find(field, pstart, dim, W, int(X0), int(X1), int(X2), low, 1)
+    level, value = maps.pyramid_find(field, pstart, dim, W, int(X0), int(X1), int(X2), cap, low, 1)
     if level == 0:
         return 0.0
     shift = FS + maps.PYRAMID_STEP[dim] * level
@@ -321,7 +321,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     dm = -1.0
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
-        fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+        fd = fcap - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
         dm = 0.0
         if fd > 1:
             # no particle in the coarse cells within fd - 1 of the walker's
@@ -332,7 +332,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             hi = min(ftop, 3)
         elif fd >= fcap:
             if len(pstart) > 2:
-                dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, low))
+                dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
             else:
                 lo, hi = flo, ftop
         while hi - lo > 1:

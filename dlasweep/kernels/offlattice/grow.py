@@ -198,7 +198,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 dm = -1.0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+                    fd = fcap - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
                     dm = 0.0
                     if fd > 1:
                         # no particle in the coarse cells within fd - 1 of the walker's
@@ -209,7 +209,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                         hi = min(ftop, 3)
                     elif fd >= fcap:
                         if len(pstart) > 2:
-                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, low))
+                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
                         else:
                             lo, hi = flo, ftop
                     while hi - lo > 1:
