@@ -278,6 +278,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     cap = FIELD_CAP[dim]
     low = maps.pyramid_low(dim, cap)
     levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
+    fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT  # the field's side
     level = 0  # the pyramid's level that bounded the walker's distance last
     nb0, base1, nb1 = blocks[0], start[1], blocks[1]
     nm = moves.shape[0]
@@ -304,6 +305,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             grid = (words, start, blocks, cells, field, width, off)
             nb0, base1, nb1 = blocks[0], start[1], blocks[1]
             levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
+            fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
             regrid = False
         if max_steps > 0 and total >= max_steps:
             status = codes.STEP_LIMIT
@@ -376,7 +378,14 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
             near = False
             if ingrid:
-                level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
+                cell = low
+                if level == 0:
+                    # the field, read here: most walkers are near the cluster, and a
+                    # call that passes the arrays costs reference counting
+                    ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+                if cell >= low:
+                    level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
                 if level == 0 and cell <= 1:
                     # a set level-1 cell: a particle may lie within two sites
                     cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
