@@ -147,7 +147,7 @@ def _allocate_maps(dim, width):
     """
     start, blocks, cells = maps.layout(dim, width)
     start -= start[min(1, len(cells) - 1)]
-    return maps.filled(start[-1], 0, np.uint64), start, blocks, cells
+    return maps.zeroed(start[-1], np.uint64), start, blocks, cells
 
 
 @jit
@@ -163,7 +163,7 @@ def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
         for c in range(klo, khi + 1):
             for b in range(max(cj - 1, 0), min(cj + 1, w - 1) + 1):
                 for a in range(max(ci - 1, 0), min(ci + 1, w - 1) + 1):
-                    q = start[s] + (a >> bs) + nb * ((b >> bs) + nb * (c >> bs))
+                    q = maps.block_word(dim, start[s], nb, a >> bs, b >> bs, c >> bs)
                     words[q] |= np.uint64(1) << np.uint64((a & bm) | ((b & bm) << bs) | ((c & bm) << (2 * bs)))
 
 
@@ -247,7 +247,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         s = (lo + hi) >> 1
         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
         nb = blocks[s]
-        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+        word = words[maps.block_word(dim, start[s], nb, j0 >> bs, j1 >> bs, j2 >> bs)]
         if (word >> np.uint64((j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs)))) & np.uint64(1):
             hi = s
         else:
@@ -339,7 +339,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             s = (lo + hi) >> 1
             j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
             nb = blocks[s]
-            word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+            word = words[maps.block_word(dim, start[s], nb, j0 >> bs, j1 >> bs, j2 >> bs)]
             bit = (j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs))
             if (word >> np.uint64(bit)) & np.uint64(1):
                 hi = s

@@ -216,7 +216,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                         s = (lo + hi) >> 1
                         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
                         nb = blocks[s]
-                        word = words[start[s] + (j0 >> bs) + nb * ((j1 >> bs) + nb * (j2 >> bs))]
+                        word = words[maps.block_word(dim, start[s], nb, j0 >> bs, j1 >> bs, j2 >> bs)]
                         bit = (j0 & bm) | ((j1 & bm) << bs) | ((j2 & bm) << (2 * bs))
                         if (word >> np.uint64(bit)) & np.uint64(1):
                             hi = s
