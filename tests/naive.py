@@ -106,3 +106,14 @@ def walk_on_spheres_exterior(dim, r0, far, n, rng, eps=1e-7):
         u /= np.linalg.norm(u, axis=1)[:, None]
         x[idx] += np.minimum(r - 1, far - r)[:, None] * u + 1e-12
     return x / np.linalg.norm(x, axis=1)[:, None], hit
+
+
+def field_distances(field, dim, fw, cap):
+    """The distances a kernel's distance field (``maps.field_cell``'s tiles,
+    ``cap - distance`` stored) holds, as an array of ``fw`` cells a side, axes in order."""
+    from dlasweep.kernels import maps
+
+    out = np.zeros((fw,) * dim, np.int64)
+    for c in np.ndindex(*out.shape):
+        out[c] = cap - int(field[maps.field_cell(dim, fw, *c, *([0] * (3 - dim)))])
+    return out
