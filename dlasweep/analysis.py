@@ -25,15 +25,12 @@ from functools import cached_property
 import numpy as np
 import xarray as xr
 
-from .fit import Fit, ensemble, fit_dimension, fit_mass_radius, mass_radius_counts, seed_interval
+from .fit import (HISTORY_START, LOCAL_PER_OCTAVE, Fit, ensemble, fit_dimension, fit_mass_radius, growth_counts,
+                  history_counts, mass_radius_counts, seed_interval)
 from .measure import radius_of_gyration
 from .params import PARAMETERS, STATUSES
 from .selection import with_selected_clusters
 
-HISTORY_START = 50
-"""Smallest count on the local-slope curve: below, a cluster is a compact blob."""
-LOCAL_PER_OCTAVE = 8
-"""Counts per octave on the local-slope curve."""
 RESAMPLES = 1000
 """Bootstrap resamples over seeds. Each interval draws its own stream (``_stream``), so that
 reruns agree and a statistic does not depend on which others were computed before it."""
@@ -236,7 +233,7 @@ class _Sweep:
         self.counts = ds["n_particles"].values.astype(np.int64)
         self.scales = ds["scale"].values
         self.n_counts, self.n_seeds = len(self.counts), ds.sizes["seed"]
-        self.history = _history_counts(int(self.counts[-1]))
+        self.history = history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
         self.layout = {
@@ -371,26 +368,6 @@ class _Sweep:
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
             "bootstrap_resamples": resamples,
         })
-
-
-def growth_counts(counts) -> np.ndarray:
-    """Counts at which a sweep records each cluster's Rg along its growth (``radius_gyration_history``).
-
-    Everything the analysis reads of a growth history: the local-slope
-    curve (``LOCAL_PER_OCTAVE`` per octave up to the largest count) and
-    ``mass_radius_counts`` of each count, so that a fit on these equals one
-    on every prefix.
-    """
-    counts = np.asarray(counts, np.int64)
-    return np.unique(np.concatenate([_history_counts(int(counts[-1])), *map(mass_radius_counts, counts)]))
-
-
-def _history_counts(n_max):
-    """Counts from ``HISTORY_START`` to ``n_max``, ``LOCAL_PER_OCTAVE`` per octave."""
-    if n_max <= HISTORY_START:
-        return np.array([n_max], np.int64)
-    k = np.arange(int(LOCAL_PER_OCTAVE * np.log2(n_max / HISTORY_START)) + 1)
-    return np.unique(np.r_[np.round(HISTORY_START * 2.0 ** (k / LOCAL_PER_OCTAVE)), n_max].astype(np.int64))
 
 
 def _merge(tables):

@@ -35,7 +35,8 @@ from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw
 from .report import ReportFolderError, earlier_report, plot_bench, report
 from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
-from .sweep import Interrupted, ResumeError, embedded_threads, run_sweep, scheduler_address
+from .parts import Interrupted, ResumeError
+from .sweep import embedded_threads, run_sweep, scheduler_address
 
 GROW_SUFFIXES = (".nc", ".png", ".svg")
 

@@ -64,6 +64,10 @@ def seed_interval(estimate, replicates, n: int, axis=-1):
     half = t95(n - 1) * np.std(replicates, axis=axis, ddof=1) * np.sqrt(n / (n - 1))
     return estimate - half, estimate + half
 
+HISTORY_START = 50
+"""Smallest count on the local-slope curve: below, a cluster is a compact blob."""
+LOCAL_PER_OCTAVE = 8
+"""Counts per octave on the local-slope curve."""
 _OCTAVE = np.log(2.0)
 START_FRACTION = 0.05
 """Default end of the transient of a growth history, as a fraction of its largest count (``mass_radius_counts``)."""
@@ -324,6 +328,26 @@ def mass_radius_counts(n_max: int, *, start_fraction: float = START_FRACTION, mi
         return np.zeros(0, np.int64)
     targets = lo * 2.0 ** (np.arange(int(per_octave * np.log2(n_max / lo)) + 1) / per_octave)
     return np.unique(np.r_[np.round(targets[targets < n_max]), n_max].astype(np.int64))
+
+
+def growth_counts(counts) -> np.ndarray:
+    """Counts at which a sweep records each cluster's Rg along its growth (``radius_gyration_history``).
+
+    Everything the analysis reads of a growth history: the local-slope
+    curve (``LOCAL_PER_OCTAVE`` per octave up to the largest count) and
+    ``mass_radius_counts`` of each count, so that a fit on these equals one
+    on every prefix.
+    """
+    counts = np.asarray(counts, np.int64)
+    return np.unique(np.concatenate([history_counts(int(counts[-1])), *map(mass_radius_counts, counts)]))
+
+
+def history_counts(n_max) -> np.ndarray:
+    """Counts from ``HISTORY_START`` to ``n_max``, ``LOCAL_PER_OCTAVE`` per octave."""
+    if n_max <= HISTORY_START:
+        return np.array([n_max], np.int64)
+    k = np.arange(int(LOCAL_PER_OCTAVE * np.log2(n_max / HISTORY_START)) + 1)
+    return np.unique(np.r_[np.round(HISTORY_START * 2.0 ** (k / LOCAL_PER_OCTAVE)), n_max].astype(np.int64))
 
 
 def fit_mass_radius(

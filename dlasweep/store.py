@@ -201,7 +201,7 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     spec : dlasweep.spec.Spec
     scales : ndarray, (n_scales,)
     history : ndarray of int, (n_history,)
-        Counts of the growth history (``analysis.growth_counts``).
+        Counts of the growth history (``fit.growth_counts``).
     science : dict of ndarray
         ``box_count`` on ``(<axes>..., size, n_particles, seed, scale)``,
         ``radius_gyration_history`` on ``(<axes>..., size, seed, history)``,

@@ -89,9 +89,9 @@ def files_under(path: Path) -> set:
 @pytest.fixture
 def replicate_1_fails(monkeypatch):
     """Make growing replicate 1 of every configuration raise, as a bug in a kernel would."""
-    from dlasweep import sweep
+    from dlasweep import task as worker
 
-    real_grow, real_grow_many = sweep.grow, sweep.grow_many
+    real_grow, real_grow_many = worker.grow, worker.grow_many
 
     def grow(n, seed, **kwargs):
         if seed.spawn_key[-1] == 1:
@@ -103,8 +103,8 @@ def replicate_1_fails(monkeypatch):
             raise RuntimeError("simulated failure")
         return real_grow_many(n, seeds, **kwargs)
 
-    monkeypatch.setattr(sweep, "grow", grow)
-    monkeypatch.setattr(sweep, "grow_many", grow_many)
+    monkeypatch.setattr(worker, "grow", grow)
+    monkeypatch.setattr(worker, "grow_many", grow_many)
 
 
 _APT_UPDATED = []
