@@ -204,7 +204,7 @@ def _grow(args) -> int:
     with _growth_bar(args.n, resolved["model"]) as bar:
         progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
         cluster = grow(args.n, args.seed, progress=progress, **resolved)
-    if cluster.status != "ok":
+    if cluster.status != _params.Status.ok.name:
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
     if out.suffix.lower() == ".nc":
         store.save(store.cluster_dataset(cluster, args.seed), out)

@@ -154,7 +154,7 @@ def _checked(n, checkpoints, params):
 
 def _cluster(result, p, marks):
     points, steps, code, times, seconds = result
-    return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds)
+    return Cluster(points, steps, _params.Status(code).name, dict(p), marks, times, seconds)
 
 
 def _watched(kernel, n, p, marks, rng, progress=None):

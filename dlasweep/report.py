@@ -2,7 +2,7 @@
 
 Draws and writes what ``analysis.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
-Rg, costs), read through ``analysis.Readout`` (rows, labels, the exact
+Rg, costs), read through ``readout.Readout`` (rows, labels, the exact
 reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
 ``summary.md``, PNG plots and ``report.md`` into one folder, which holds
 one report: an earlier report there is removed first (``files`` names
@@ -18,22 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import (
-    EXACT_METHOD,
-    MIN_CI_SEEDS,
-    Readout,
-    bias,
-    error_bars,
-    fitted_line,
-    fitted_scales,
-    plain,
-    resolved,
-    visible_scales,
-)
 from .bench import exponent_attribute
-from .fit import MIN_DECADES, START_FRACTION
-from .params import text
+from .config import MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
+from .params import EXACT_METHOD, text
 from .pictures import draw_points
+from .readout import REFERENCE_D, Readout, bias, error_bars, fitted_line, fitted_scales, plain, resolved, visible_scales
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
@@ -767,8 +756,9 @@ def _write_report(sweep, figures, path) -> Path:
         "Box counting, a finite-cluster estimate that reads low (not an equal of the above): "
         + "; ".join(f"{label}: {_interval(row, 'D_box')}" for label, row in rows) + ".",
         "",
-        f"Reference: 2D off-lattice DLA D = 1.7100(3) (Menshutin et al. 2008), 1.715(4) (Tolman and Meakin "
-        f"1989); 3D DLA about 2.50. This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
+        f"Reference: 2D off-lattice DLA D = {REFERENCE_D[2]:.4f}(3) (Menshutin et al. 2008), 1.715(4) (Tolman and "
+        f"Meakin 1989); 3D DLA about {REFERENCE_D[3]:.2f}. "
+        f"This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
         "",
         "## How D is measured, and how far to trust it",
         "",

@@ -16,7 +16,7 @@ import numpy as np
 from . import measure, store
 from .fit import growth_counts
 from .grow import grow, grow_many
-from .params import STATUSES
+from .params import Status
 from .spec import Spec
 
 
@@ -71,7 +71,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
         return {
             **measures,
             "n_grown": prefix.astype(np.int64),
-            "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
+            "status": np.where(reached, Status.ok, Status[cluster.status]).astype(np.int8),
             "wall_time": np.where(np.isnan(cluster.times), cluster.seconds, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],
@@ -92,6 +92,6 @@ def error_result(counts, n_scales, dim, message) -> dict:
     n_counts = len(counts)
     shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
     result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
-    result["status"][:] = STATUSES.index("error")
+    result["status"][:] = Status.error
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
             "error": np.array(store.one_line(message))}

@@ -13,7 +13,8 @@ import xarray as xr
 import dlasweep as dla
 from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
 from dlasweep import store
-from dlasweep.analysis import MIN_CI_SEEDS, Readout
+from dlasweep.config import MIN_CI_SEEDS
+from dlasweep.readout import Readout
 from dlasweep.params import STATUSES
 from dlasweep.report import report
 
