@@ -14,6 +14,7 @@ import itertools
 import numpy as np
 
 from . import measure, store
+from .boxes import default_scales
 from .fit import growth_counts
 from .grow import grow, grow_many
 from .params import Status
@@ -27,7 +28,7 @@ def sweep_scales(spec: Spec) -> np.ndarray:
     connected one of n particles spans at most n (+ a seed block). The
     axis is trimmed to the clusters after the sweep.
     """
-    return measure.default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
+    return default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
 
 
 def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:

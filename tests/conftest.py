@@ -30,6 +30,33 @@ root_seed = 12345
 """Twelve small clusters: one swept parameter, a bounded and an unbounded box."""
 
 
+def colours_shown(path) -> dict:
+    """The colours a picture shows and how many pixels each covers, white and greys (text, axes) left out.
+
+    A PNG is read as it is; an SVG by the images it embeds (a lattice cluster is one).
+    """
+    import base64
+    import io
+    import re
+
+    import numpy as np
+    from PIL import Image
+
+    path = Path(path)
+    if path.suffix == ".svg":
+        embedded = re.findall(r'xlink:href="data:image/png;base64,([^"]*)"', path.read_text())
+        pictures = [io.BytesIO(base64.b64decode("".join(data.split()))) for data in embedded]
+    else:
+        pictures = [path]
+    shown = {}
+    for picture in pictures:
+        rgb = np.asarray(Image.open(picture).convert("RGB")).reshape(-1, 3).astype(int)
+        coloured = rgb[rgb.max(axis=1) > rgb.min(axis=1)]
+        for colour, count in zip(*np.unique(coloured, axis=0, return_counts=True)):
+            shown[tuple(colour)] = shown.get(tuple(colour), 0) + int(count)
+    return shown
+
+
 @pytest.fixture
 def write_spec(tmp_path):
     """Write spec text (dedented) to a TOML file and return its path."""

@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 
 import dlasweep
 import naive
-from dlasweep import measure
-from dlasweep.measure import box_counts, default_scales, max_radius, radius_of_gyration
+from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
+from dlasweep import boxes, measure
+from dlasweep.boxes import box_counts, default_scales
+from dlasweep.measure import max_radius, radius_of_gyration
 
 
 def random_set(dim, lattice, n, width, seed):
@@ -68,7 +68,7 @@ def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, lattice, c
     # a larger side on.
     points = random_set(dim, lattice, 2000 if dim == 2 else 500, 120 if dim == 2 else 24, 7)
     expected = box_counts(points, lattice=lattice)
-    monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
+    monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
     np.testing.assert_array_equal(box_counts(points, lattice=lattice), expected)
 
 
@@ -97,10 +97,10 @@ def test_every_route_from_the_particles_matches_reference(monkeypatch, dim, kind
     points = random_set(dim, kind == "sites", 200 if lattice else 60, 40 if dim == 2 else 16, dim)
     settings, (kernel, took) = ROUTES[route]
     for name, value in settings.items():
-        monkeypatch.setattr(measure, name, value)
+        monkeypatch.setattr(boxes, name, value)
     calls = []
-    run = getattr(measure, kernel)
-    monkeypatch.setattr(measure, kernel, lambda *args: calls.append(args) or run(*args))
+    run = getattr(boxes, kernel)
+    monkeypatch.setattr(boxes, kernel, lambda *args: calls.append(args) or run(*args))
     scales, counts = box_counts(points, lattice=lattice)
     assert any(took(args) for args in calls), "the route did not run"
     offsets = naive.grid_offsets(scales)
@@ -125,14 +125,14 @@ def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(d
 
     def marked(side):
         # Floating-point coordinates are never put in strips.
-        _, stack, shape = measure._from_points(points.astype(float), high, offsets[side], side, radius, keep=True)
+        _, stack, shape = boxes._from_points(points.astype(float), high, offsets[side], side, radius, keep=True)
         return occupied(stack, shape)
 
     for base in (1, 3):
-        count, stack, shape = measure._from_points(points, high, offsets[base], base, radius, keep=True)
+        count, stack, shape = boxes._from_points(points, high, offsets[base], base, radius, keep=True)
         for side in (base, 2 * base, 4 * base):
             if side > base:
-                count, stack, shape = measure._halve(stack, shape, offsets[side // 2], side, offsets[side])
+                count, stack, shape = boxes._halve(stack, shape, offsets[side // 2], side, offsets[side])
             expected = marked(side)
             assert len(occupied(stack, shape)) == len(expected) == len(offsets[side]) ** dim
             for got, want in zip(occupied(stack, shape), expected):
@@ -140,29 +140,15 @@ def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(d
             assert count == min(len(boxes) for boxes in expected)
 
 
-def ternary(level, dim, keep):
-    """Cells of [0, 3**level)**dim all of whose base-3 digit tuples are in ``keep``."""
-    cells = np.zeros((1, dim), np.int64)
-    for _ in range(level):
-        cells = (3 * cells[:, None, :] + np.array(sorted(keep))[None, :, :]).reshape(-1, dim)
-    return cells
-
-
-def gasket(level):
-    """Pascal's triangle mod 2 on 2**level rows: C(i, j) is odd iff j's bits are among i's (Lucas)."""
-    i, j = np.mgrid[0 : 2**level, 0 : 2**level]
-    return np.argwhere((i & j) == j)
-
-
 SELF_SIMILAR = {
     # name: (points, side ratio, pieces, level)
-    "gasket": (gasket(10), 2, 3, 10),
+    "gasket": (pascal_gasket(10), 2, 3, 10),
     "square": (np.argwhere(np.ones((1024, 1024), bool)), 2, 4, 10),
-    "carpet": (ternary(5, 2, set(itertools.product(range(3), repeat=2)) - {(1, 1)}), 3, 8, 5),
-    "menger": (ternary(4, 3, {d for d in itertools.product(range(3), repeat=3) if d.count(1) < 2}), 3, 20, 4),
-    "dust2": (ternary(5, 2, set(itertools.product((0, 2), repeat=2))), 3, 4, 5),
-    "dust3": (ternary(4, 3, set(itertools.product((0, 2), repeat=3))), 3, 8, 4),
-    "vicsek": (ternary(5, 2, {(1, 1), (0, 1), (1, 0), (2, 1), (1, 2)}), 3, 5, 5),
+    "carpet": (iterated(CARPET, 5), 3, 8, 5),
+    "menger": (iterated(MENGER, 4), 3, 20, 4),
+    "dust2": (iterated(DUST_2D, 5), 3, 4, 5),
+    "dust3": (iterated(DUST_3D, 4), 3, 8, 4),
+    "vicsek": (iterated([(0, 1), (1, 0), (1, 1), (1, 2), (2, 1)], 5), 3, 5, 5),  # the plus: axis-aligned arms
 }
 
 
@@ -222,7 +208,7 @@ def test_gasket_counts_rise_between_families_only_where_every_integer_grid_does(
     # The issue: with sides 2**(k/4) the gasket's count rose from side 2
     # (19683) to 2.38 (about 20700), and within every octave. Whole sides keep
     # each family exact (3**(10-k) at 2**k, checked above) and never rising.
-    scales, counts = box_counts(gasket(10))
+    scales, counts = box_counts(pascal_gasket(10))
     count = dict(zip(scales.astype(int).tolist(), counts.tolist()))
     assert (count[2], count[3], count[4]) == (19683, 15243, 6561)
     # Between families the counts still rise on this set, which is tuned to
@@ -232,7 +218,7 @@ def test_gasket_counts_rise_between_families_only_where_every_integer_grid_does(
     # any side look best). At sides 5 and 10 it is the set's doing, not the
     # placement's: no grid at any integer offset does better.
     assert (count[5], count[10]) == (7046, 2348)
-    points = gasket(10)
+    points = pascal_gasket(10)
     for side in (5, 10):
         boxes = [(points + (a, b)) // side for a in range(side) for b in range(side)]
         every = [len(np.unique(x * 4096 + y)) for x, y in (box.T for box in boxes)]
@@ -409,7 +395,7 @@ def test_every_prefix_counted_at_once_equals_box_counts_of_that_prefix(dim, latt
     for points in sets:
         ends = some_prefixes(len(points), rng)
         for scales in (None, default_scales(len(points) + 2)):
-            got_scales, got = measure.prefix_box_counts(points, ends, lattice=lattice, scales=scales)
+            got_scales, got = boxes.prefix_box_counts(points, ends, lattice=lattice, scales=scales)
             np.testing.assert_array_equal(got_scales, box_counts(points, scales=scales)[0] if scales is None
                                           else scales)
             np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, got_scales))
@@ -426,22 +412,22 @@ def test_every_prefix_at_once_takes_the_routes_box_counts_takes(monkeypatch, dim
     if not lattice:
         points = points + np.random.default_rng(6).random(points.shape)
     ends = some_prefixes(len(points), np.random.default_rng(7))
-    monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
+    monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
     for strips in (2, 0):
-        monkeypatch.setattr(measure, "_STRIP_WORDS_PER_SITE", strips)
-        scales, got = measure.prefix_box_counts(points, ends, lattice=lattice)
+        monkeypatch.setattr(boxes, "_STRIP_WORDS_PER_SITE", strips)
+        scales, got = boxes.prefix_box_counts(points, ends, lattice=lattice)
         np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, scales))
 
 
 def test_prefix_box_counts_refuses_bad_input():
     with pytest.raises(ValueError, match="ends"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [0, 3])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [0, 3])
     with pytest.raises(ValueError, match="ends"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [4])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [4])
     with pytest.raises(ValueError, match="scales"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
     with pytest.raises(ValueError, match="points"):
-        measure.prefix_box_counts(np.zeros((3, 4)), [3])
+        boxes.prefix_box_counts(np.zeros((3, 4)), [3])
 
 
 @pytest.mark.parametrize("lattice", [True, False])
@@ -463,7 +449,7 @@ def test_cluster_measures_equal_the_functions_they_gather(dim, lattice):
         scales = default_scales(min(np.ptp(points, axis=0).max() + 2, 3000))
         got = measure.cluster_measures(points, ends, history, lattice=lattice, scales=scales)
         rg = radius_of_gyration(points)
-        np.testing.assert_array_equal(got["box_count"], measure.prefix_box_counts(points, ends, lattice, scales)[1])
+        np.testing.assert_array_equal(got["box_count"], boxes.prefix_box_counts(points, ends, lattice, scales)[1])
         np.testing.assert_array_equal(got["radius_gyration"], rg[ends - 1])
         np.testing.assert_array_equal(got["radius_gyration_history"],
                                       np.where(history <= n, rg[np.minimum(history, n) - 1], np.nan))
@@ -479,4 +465,4 @@ def test_particles_are_put_in_first_axis_order_only_where_their_bitmaps_outgrow_
     # 92 x 2 words of 8 bytes, or 2048 x 18; a 3D set of 64 x 64 rows of 1 word, or 201 x 201 of 4 words;
     # a first axis longer than the sort's table allows (and than the set's size) is never sorted.
     points = np.zeros((1000, len(high)))
-    assert measure._ordered(points, np.array(high, float)) is ordered
+    assert boxes._ordered(points, np.array(high, float)) is ordered

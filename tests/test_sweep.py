@@ -24,7 +24,7 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, files_under, science
-from dlasweep import measure, progress, store, sweep
+from dlasweep import boxes, measure, progress, store, sweep
 from dlasweep import task as worker
 from dlasweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
 from dlasweep.spec import parse_spec
@@ -53,7 +53,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
             assert int(at["walk_steps"]) == cluster.steps[:m].sum()
             assert float(at["radius_gyration"]) == measure.radius_of_gyration(cluster.points)[m - 1]
             np.testing.assert_equal(float(at["anisotropy"]), measure.anisotropy(cluster.points, [m])[0])
-            _, counts = measure.box_counts(cluster.points[:m], scales=reference["scale"].values)
+            _, counts = boxes.box_counts(cluster.points[:m], scales=reference["scale"].values)
             np.testing.assert_array_equal(at["box_count"].values, counts)
             ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
             assert ok == (m == n) and (ok or cluster.status != "ok")
