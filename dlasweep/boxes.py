@@ -2,16 +2,15 @@
 
 Pure functions of an ``(n, dim)`` point array (dim 2 or 3) in attachment
 order; no I/O. Lengths are in lattice units (off-lattice: particle diameters).
-``box_counts`` measures one set; ``prefix_box_counts`` every prefix of one
-at once, in compiled code (``_count_prefix``, the same traversal step by
-step) that releases the GIL; a prefix with a grid too large for a bitmap
-goes back to ``box_counts``, which counts such a grid by sorting its boxes.
+``box_counts`` measures one set, ``prefix_box_counts`` every prefix of one
+at once: both with one traversal (``_count_prefix``), compiled, releasing the
+GIL; the grids too large for a bitmap (sparse sets, not clusters) are then
+counted by sorting their boxes (``PrefixBoxes.finish``).
 """
 
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 
@@ -60,6 +59,12 @@ alone is counted by sorting its boxes."""
 _STRIP_WORDS_PER_SITE = 2
 """Integer sites are put in strips when a strip has fewer words than this per site. Measured: a grid costs
 about 4 ns a site when marked from the sites, 1.7 ns a strip word when merged from the strips."""
+
+ROUTES = ("one box", "halved", "strips of sites", "one pass", "a few grids a pass", "sorted")
+"""How a side is counted, by code (``PrefixBoxes.routes``): the set fits one box; its grids halved from those
+of half the side; merged from strips of sites; marked from the particles in one pass, or a few grids a pass;
+too large for a bitmap, its boxes sorted."""
+ONE_BOX, HALVED, STRIPS, ONE_PASS, PASSES, SORTED = range(len(ROUTES))
 
 _EVEN = np.uint64(0x5555555555555555)
 """The even bits of a word."""
@@ -303,90 +308,6 @@ def _slab(shape):
     return (1,) * (3 - len(shape)) + tuple(int(n) for n in shape)
 
 
-def _bitmap_words(shape):
-    """Words of one grid's bitmap: a row per box of the leading axes, a bit per box of the last."""
-    return math.prod(int(n) for n in shape[:-1]) * -(-int(shape[-1]) // 64)
-
-
-def _grids_within_cap(shape):
-    """How many grids of ``shape`` have bitmaps within ``_BITMAP_CAP`` bits together."""
-    return _BITMAP_CAP // (64 * _bitmap_words(shape))
-
-
-def _empty_bitmaps(shape, grids, make=np.zeros):
-    """Bitmaps for ``grids`` grids of ``shape``, laid out as in ``_mark_boxes`` (``make=np.empty``: unset)."""
-    return make((grids, math.prod(int(n) for n in shape[:-1]), -(-int(shape[-1]) // 64)), np.uint64)
-
-
-def _from_points(points, high, offsets, scale, radius, keep):
-    """Least count over the grids of side ``scale`` with per-axis ``offsets``, from the particles.
-
-    Also returns their stacked bitmaps (None unless ``keep`` and they fit the
-    cap together) and the grids' common shape. Integer sites are put in
-    strips that the grids are merged from (when that is cheaper); otherwise
-    the grids are marked in as few passes over the particles as the cap
-    allows, and a grid too large for a bitmap alone is counted by sorting
-    its boxes.
-    """
-    dim, grids = points.shape[1], len(offsets) ** points.shape[1]
-    # Anchored at -1/2 - offset: the largest offset needs the most boxes.
-    shape = np.floor((high + radius + _HALF + offsets[-1]) / scale).astype(np.int64) + 1
-    per_pass = _grids_within_cap(shape)
-    # Integer sites need no marking per grid. They are put in their boxes on
-    # the last axis only, in one strip per offset there, a row per site of
-    # the leading axes. On those the site x is in box floor((x + 1/2 + o) / s)
-    # = floor((x + o) / s) (the quotient, in floating point too, is at least
-    # 1/2s from a whole number), so a box at offset o holds the sites
-    # s b - o, ..., s b - o + s - 1, and each grid's row is the union of
-    # s**(dim-1) strip rows: a grid costs a pass over a strip's words, not
-    # over the sites.
-    cells = np.r_[high[:-1] + 1, shape[-1]]
-    if (radius == 0.0 and points.dtype.kind == "i" and per_pass >= grids
-            and _grids_within_cap(cells) >= len(offsets)
-            and (scale == 1 or _bitmap_words(cells) < _STRIP_WORDS_PER_SITE * len(points))):
-        strips = _empty_bitmaps(cells, len(offsets))
-        _mark_sites(points, np.array(offsets, np.int64), float(scale), tuple(int(n) for n in cells[:-1]), strips)
-        if scale == 1:  # one offset, and boxes that are sites: the strip is the grid
-            return _least_count(strips), strips if keep else None, shape
-        stack = _empty_bitmaps(shape, grids, np.empty)
-        part, shift = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
-        part[2], shift[3 - dim : 2] = np.arange(len(offsets)), offsets
-        factor = _slab((int(scale),) * (dim - 1) + (1,))
-        best = _coarsen(strips, _slab(cells), part, shift, factor, stack, _slab(shape))
-        return best, stack if keep else None, shape
-    args = (points, np.array(offsets, np.int64), float(scale), radius, _slab(shape))
-    if per_pass == 0:
-        visits = np.empty((len(points) * (2**dim if radius > 0.0 else 1), 3), np.int64)
-        counts = [len(np.unique(visits[: _mark_boxes(*args, g, np.empty((0, 0, 0), np.uint64), visits)], axis=0))
-                  for g in range(grids)]
-        return min(counts), None, shape
-    best = None
-    for first in range(0, grids, per_pass):
-        stack = _empty_bitmaps(shape, min(per_pass, grids - first))
-        _mark_boxes(*args, first, stack, np.empty((0, 0), np.int64))
-        count = _least_count(stack)
-        best = count if best is None else min(best, count)
-    return best, stack if keep and per_pass >= grids else None, shape
-
-
-def _halve(fine, fine_shape, fine_offsets, side, offsets):
-    """Least count over the grids of side ``side`` with per-axis ``offsets``, from the grids of half that side.
-
-    ``fine`` holds the bitmaps of the grids of side s = side / 2 with
-    per-axis ``fine_offsets``, among them o % s for every o in ``offsets``.
-    Returns the count, the grids' stacked bitmaps and their shape, or None
-    when those bitmaps would exceed the cap together.
-    """
-    dim = len(fine_shape)
-    shape = fine_shape // 2 + 1
-    if _grids_within_cap(shape) < len(offsets) ** dim:
-        return None
-    part, shift = _halving(fine_offsets, side // 2, offsets, dim)
-    stack = _empty_bitmaps(shape, len(offsets) ** dim, np.empty)
-    count = _coarsen(fine, _slab(fine_shape), part, shift, _slab((2,) * dim), stack, _slab(shape))
-    return count, stack, shape
-
-
 def _halving(fine_offsets, half, offsets, dim):
     """``_coarsen``'s ``part`` and ``shift`` that make the grids of side 2 ``half`` from those of side ``half``.
 
@@ -422,16 +343,22 @@ def _families(sides: tuple, offsets: int):
     return parent, children, grid_offsets
 
 
-def _checked_points(points, offsets):
-    """``points`` as int64 (integers) or float64, checked for ``box_counts``."""
+def checked_points(points, dtype=None) -> np.ndarray:
+    """``points`` checked for every measure: a non-empty (n, 2) or (n, 3) array of finite coordinates.
+
+    Returned as ``dtype``, by default int64 for integers and float64 otherwise.
+
+    Raises
+    ------
+    ValueError
+        One line, naming ``points``.
+    """
     p = np.asarray(points)
     if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) == 0:
         raise ValueError(f"points: expected a non-empty (n, 2) or (n, 3) array, got shape {p.shape}")
-    p = p.astype(np.int64 if p.dtype.kind in "iub" else np.float64, copy=False)
+    p = p.astype(dtype or (np.int64 if p.dtype.kind in "iub" else np.float64), copy=False)
     if p.dtype.kind == "f" and not np.isfinite(p).all():
         raise ValueError("points: every coordinate must be finite")
-    if offsets < 1:
-        raise ValueError(f"offsets: {offsets} is below 1")
     return p
 
 
@@ -462,6 +389,14 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     the smallest count kept. As O(2s) holds O(s) and a 2s-box is a union of
     s-boxes, the count never rises from s to 2s.
 
+    The sides are visited depth first along each family s, 2s, 4s, ...: a
+    side's grids are halved from those of half the side while their bitmaps
+    fit ``_BITMAP_CAP`` together, else marked from the particles (integer
+    sites in strips, one per offset, that the grids are merged from, when
+    that is cheaper; else as many grids a pass as the cap allows); grids too
+    large for a bitmap alone are counted by sorting their boxes. ``ROUTES``
+    names these ways; each gives the same count.
+
     Parameters
     ----------
     points : array_like, (n, dim)
@@ -479,46 +414,17 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     scales : ndarray of float64
     counts : ndarray of int64
     """
-    p = _checked_points(points, offsets)
-    # Coordinates from the low corner, so the extreme particles sit exactly
-    # (not within rounding) half a particle inside the first box. Column by
-    # column: numpy reduces an (n, 2) array along axis 0 ten times slower.
-    p = p - np.array([c.min() for c in p.T])
-    high = np.array([c.max() for c in p.T])
-    extent = float(high.max()) + 2 * _HALF
-    scales = _checked_scales(scales, extent)
-    radius = 0.0 if lattice else _HALF
-    if p.dtype.kind == "i" and extent < 2**31:
-        p = p.astype(np.int32)  # half the memory traffic
-    if _ordered(p, high):
-        p = _first_axis_order(p, int(high[0]))
-    sides = [int(s) for s in scales]
-    parent, children, grid_offsets = _families(tuple(sides), offsets)
-    # One box of a side >= extent, placed at the low corner, holds the whole
-    # set; a small cluster measured at a sweep's scales skips most of them.
-    counts = np.ones(len(scales), np.int64)
-    # Depth first along each family s, 2s, 4s, ..., so that only the bitmaps
-    # of one side and its double are held; None means "from the particles".
-    pending = [(k, None) for k in range(len(sides)) if k not in parent and sides[k] < extent]
-    while pending:
-        k, finer = pending.pop()
-        side, own = sides[k], grid_offsets[k]
-        kids = [c for c in children.get(k, ()) if sides[c] < extent]
-        halved = None if finer is None else _halve(*finer, side, own)
-        counts[k], stack, shape = halved or _from_points(p, high, own, side, radius, keep=bool(kids))
-        pending += [(c, None if stack is None else (stack, shape, own)) for c in kids]
-    return scales, counts
-
+    boxes = PrefixBoxes(points, None, lattice, scales, offsets)
+    boxes.count()
+    return boxes.scales.copy(), boxes.counts[0]
 
 
 def prefix_box_counts(points, ends, lattice: bool = True, scales=None, offsets: int = 4):
     """``box_counts(points[:m], lattice, scales, offsets)`` for every m in ``ends``, in one call.
 
-    The counts are those of ``box_counts``, bit for bit (the same rule and
-    kernels; a test holds the two together). The work runs in compiled code
-    that releases the GIL, so threads measure clusters in parallel; a prefix
-    with a grid too large for a bitmap (a sparse set, not a cluster) is
-    handed to ``box_counts``.
+    The same traversal as ``box_counts``, one prefix after the other in one
+    compiled call that releases the GIL, so threads measure clusters in
+    parallel.
 
     Parameters
     ----------
@@ -535,41 +441,68 @@ def prefix_box_counts(points, ends, lattice: bool = True, scales=None, offsets: 
     counts : ndarray of int64, (len(ends), len(scales))
     """
     boxes = PrefixBoxes(points, ends, lattice, scales, offsets)
-    boxes.finish(_prefix_counts(*boxes.args))
+    boxes.count()
     return boxes.scales.copy(), boxes.counts
 
 
 class PrefixBoxes:
-    """The checked inputs of ``_prefix_counts`` for prefixes of one set, and the counts it fills in."""
+    """The checked inputs of ``_prefix_counts`` for prefixes of one set, and the counts it fills in.
+
+    ``ends`` None: the whole set. ``routes`` records how each side of each
+    prefix was counted (``ROUTES``).
+    """
 
     def __init__(self, points, ends, lattice, scales, offsets):
-        p = _checked_points(points, offsets)
-        ends = np.asarray(ends, np.int64).ravel()
+        p = checked_points(points)
+        if offsets < 1:
+            raise ValueError(f"offsets: {offsets} is below 1")
+        ends = np.array([len(p)] if ends is None else ends, np.int64).ravel()
         if not (ends.size and 1 <= ends.min() and ends.max() <= len(p)):
             raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
-        self.points, self.ends, self.lattice, self.offsets = p, ends, lattice, offsets
+        self.points, self.ends, self.radius = p, ends, 0.0 if lattice else _HALF
         p = p[: ends.max()]
         low, side = _corner(p)
         extent = float(side) + 2 * _HALF
         if scales is None:
             scales = default_scales(extent)
         # A sweep measures every cluster at the same scales: checked and planned once.
-        self.scales, plan = _plan(np.asarray(scales, np.float64).ravel().tobytes(), offsets, p.shape[1])
+        self.scales, self.plan = _plan(np.asarray(scales, np.float64).ravel().tobytes(), offsets, p.shape[1])
         self.counts = np.ones((len(ends), len(self.scales)), np.int64)
+        self.routes = np.zeros((len(ends), len(self.scales)), np.int8)
         integer = p.dtype.kind == "i"
-        compiled = not integer or extent < 2**31
-        if integer and compiled:  # from the low corner, exactly: each prefix is shifted again to its own
-            p = (p - low).astype(np.int32)
-        # Beyond int32, no prefix is given to the compiled code (``finish`` counts them all).
-        self.args = (p, ends if compiled else ends[:0], integer, 0.0 if lattice else _HALF, *plan, _BITMAP_CAP,
-                     _STRIP_WORDS_PER_SITE, self.counts)
+        if integer:  # from the low corner, exactly: each prefix is shifted again to its own
+            p = p - low
+            if extent < 2**31:
+                p = p.astype(np.int32)  # half the memory traffic
+        self.args = (p, ends, integer, self.radius, *self.plan, _BITMAP_CAP, _STRIP_WORDS_PER_SITE, self.counts,
+                     self.routes)
 
-    def finish(self, done):
-        """Count with ``box_counts`` the prefixes that ``_prefix_counts`` left (``done`` False, or not given)."""
-        for c in range(len(self.ends)):
-            if c < len(done) and done[c]:
-                continue
-            self.counts[c] = box_counts(self.points[: self.ends[c]], self.lattice, self.scales, self.offsets)[1]
+    def count(self):
+        """Fill in ``counts``: in compiled code, then ``finish``."""
+        _prefix_counts(*self.args)
+        self.finish()
+
+    def finish(self):
+        """Count the grids ``_prefix_counts`` left (-1: too large for a bitmap) by sorting their boxes."""
+        sides, own, n_own = self.plan[:3]
+        for c, k in zip(*np.nonzero(self.counts < 0)):
+            self.counts[c, k] = _sorted_count(self.args[0][: self.ends[c]], sides[k], own[k, : n_own[k]], self.radius)
+
+
+def _sorted_count(prefix, side, offsets, radius):
+    """Least count over the grids of ``side`` with per-axis ``offsets``, by sorting each grid's boxes.
+
+    For grids too large for a bitmap: sparse sets, not clusters. The prefix
+    is placed as ``_count_prefix`` places it, from its low corner.
+    """
+    points = prefix - np.array([c.min() for c in prefix.T])
+    high = np.array([c.max() for c in points.T])
+    dim = points.shape[1]
+    shape = np.floor((high + radius + _HALF + offsets[-1]) / side).astype(np.int64) + 1
+    visits = np.empty((len(points) * (2**dim if radius > 0.0 else 1), 3), np.int64)
+    none = np.empty((0, 0, 0), np.uint64)
+    return min(len(np.unique(visits[: _mark_boxes(points, offsets, float(side), radius, _slab(shape), g, none, visits)],
+                             axis=0)) for g in range(len(offsets) ** dim))
 
 
 @jit
@@ -619,29 +552,40 @@ def _plan(scales: bytes, offsets: int, dim: int):
 
 @jit
 def _words(shape):
-    """Words of one grid's bitmap, ``shape`` on three axes (``_bitmap_words``)."""
+    """Words of one grid's bitmap, ``shape`` on three axes: a row per box of the leading axes, a bit per box of
+    the last."""
     return shape[0] * shape[1] * ((shape[2] + 63) // 64)
 
 
 @jit
-def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words,
-                   counts):
-    """``counts[c]``: ``box_counts(points[:ends[c]])``'s counts, the routes chosen as it chooses them.
+def _grids_within(cap, shape):
+    """How many grids of ``shape`` (three axes) have bitmaps within ``cap`` bits together.
 
-    ``counts`` comes filled with ones (the sides a prefix fits in). Returns
-    whether each prefix was counted: not when a grid of it is too large for
-    a bitmap (``box_counts`` then sorts its boxes).
+    The size is checked in floating point first: the grids of a sparse set's
+    finest sides can have more words than an int64 holds.
     """
-    done = np.zeros(len(ends), np.bool_)
-    for c in range(len(ends)):
-        done[c] = _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift,
-                                cap, strip_words, counts[c])
-    return done
+    if 64.0 * shape[0] * shape[1] * ((shape[2] + 63) // 64) > cap:
+        return 0
+    return cap // (64 * _words(shape))
 
 
 @jit
-def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, out):
-    """``_prefix_counts`` for one prefix: ``box_counts``'s traversal and routes, step by step."""
+def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words,
+                   counts, routes):
+    """``counts[c]``: the counts of ``points[:ends[c]]``, and ``routes[c]`` how each side was counted.
+
+    ``counts`` comes filled with ones (the sides a prefix fits in); a side
+    whose grids are too large for a bitmap is left at -1 (``PrefixBoxes.finish``).
+    """
+    for c in range(len(ends)):
+        _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift, cap,
+                      strip_words, counts[c], routes[c])
+
+
+@jit
+def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, out,
+                  route):
+    """``_prefix_counts`` for one prefix: the traversal of ``box_counts``' docstring, a route per side (``ROUTES``)."""
     n, dim = prefix.shape
     low = prefix[0].copy()
     for i in range(n):
@@ -672,24 +616,34 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
         grids = len(offsets) ** dim
         m = parent[k]
         count, stack, shape = -1, stacks[k], shapes[k]
-        if m >= 0 and len(stacks[m]) > 0:  # halved from the parent's grids (_halve)
+        if m >= 0 and len(stacks[m]) > 0:  # halved from the parent's grids
             fine = shapes[m]
             shape = fine // 2 + 1
             shape[:pad] = 1
-            if cap // (64 * _words(shape)) >= grids:
+            if _grids_within(cap, shape) >= grids:
                 stack = np.empty((grids, shape[0] * shape[1], (shape[2] + 63) // 64), np.uint64)
+                route[k] = HALVED
                 count = _coarsen(stacks[m], (fine[0], fine[1], fine[2]), part[k, :, : len(offsets)].copy(),
                                  shift[k, :, : len(offsets)].copy(), halves, stack, (shape[0], shape[1], shape[2]))
-        if count < 0:  # from the particles (_from_points)
+        if count < 0:  # from the particles
             shape = np.ones(3, np.int64)
             for a in range(dim):
                 shape[pad + a] = np.int64(np.floor((high[a] + radius + _HALF + offsets[-1]) / side)) + 1
-            per_pass = cap // (64 * _words(shape))
+            per_pass = _grids_within(cap, shape)
+            # Integer sites need no marking per grid. They are put in their boxes on
+            # the last axis only, in one strip per offset there, a row per site of
+            # the leading axes. On those the site x is in box floor((x + 1/2 + o) / s)
+            # = floor((x + o) / s) (the quotient, in floating point too, is at least
+            # 1/2s from a whole number), so a box at offset o holds the sites
+            # s b - o, ..., s b - o + s - 1, and each grid's row is the union of
+            # s**(dim-1) strip rows: a grid costs a pass over a strip's words, not
+            # over the sites.
             cells = shape.copy()
             for a in range(dim - 1):
                 cells[pad + a] = high[a] + 1
-            if (radius == 0.0 and integer and per_pass >= grids and cap // (64 * _words(cells)) >= len(offsets)
+            if (radius == 0.0 and integer and per_pass >= grids and _grids_within(cap, cells) >= len(offsets)
                     and (side == 1 or _words(cells) < strip_words * n)):
+                route[k] = STRIPS
                 strips = np.zeros((len(offsets), cells[0] * cells[1], (cells[2] + 63) // 64), np.uint64)
                 if dim == 2:
                     _mark_sites(points, offsets, float(side), (cells[1],), strips)
@@ -706,8 +660,10 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                     count = _coarsen(strips, (cells[0], cells[1], cells[2]), merge, moved,
                                      (side if dim == 3 else 1, side, 1), stack, (shape[0], shape[1], shape[2]))
             elif per_pass == 0:
-                return False
+                route[k] = SORTED  # counted by ``PrefixBoxes.finish``; count stays -1
+                stack = np.empty((0, 0, 0), np.uint64)
             else:
+                route[k] = ONE_PASS if per_pass >= grids else PASSES
                 for first in range(0, grids, per_pass):
                     stack = np.zeros((min(per_pass, grids - first), shape[0] * shape[1], (shape[2] + 63) // 64),
                                      np.uint64)
@@ -724,4 +680,3 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
             kids[m] -= 1
             if kids[m] == 0:
                 stacks[m] = np.empty((0, 0, 0), np.uint64)
-    return True

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit import jit
-from .boxes import PrefixBoxes, _prefix_counts
+from .boxes import PrefixBoxes, _prefix_counts, checked_points
 
 
 def cluster_measures(points, ends, history, lattice: bool = True, scales=None, offsets: int = 4) -> dict:
@@ -44,15 +44,16 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
     positions = np.ascontiguousarray(boxes.points, dtype=np.float64)
     rg, rg_history, radius, shape = np.empty(len(boxes.ends)), np.empty(len(history)), np.empty(len(boxes.ends)), \
         np.empty(len(boxes.ends))
-    boxes.finish(_cluster_measures(positions, boxes.ends, history, rg, rg_history, radius, shape, *boxes.args))
+    _cluster_measures(positions, boxes.ends, history, rg, rg_history, radius, shape, *boxes.args)
+    boxes.finish()
     return {"box_count": boxes.counts, "radius_gyration": rg, "radius_gyration_history": rg_history,
             "max_radius": radius, "anisotropy": shape}
 
 
 @jit
 def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, points, box_ends, integer, box_radius,
-                      sides, own, n_own, order, parent, part, shift, cap, strip_words, counts):
-    """``cluster_measures``' figures, into the arrays given; returns ``_prefix_counts``'s ``done``."""
+                      sides, own, n_own, order, parent, part, shift, cap, strip_words, counts, routes):
+    """``cluster_measures``' figures, into the arrays given (the box counts as ``_prefix_counts`` leaves them)."""
     gyration = _prefix_gyration(positions)
     distances = _distances(positions)
     for c in range(1, len(distances)):
@@ -62,8 +63,8 @@ def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, p
     for c in range(len(history)):
         rg_history[c] = gyration[history[c] - 1] if history[c] <= len(gyration) else np.nan
     shape[:] = _anisotropy(positions, ends)
-    return _prefix_counts(points, box_ends, integer, box_radius, sides, own, n_own, order, parent, part, shift, cap,
-                          strip_words, counts)
+    _prefix_counts(points, box_ends, integer, box_radius, sides, own, n_own, order, parent, part, shift, cap,
+                   strip_words, counts, routes)
 
 
 @jit
@@ -98,17 +99,11 @@ def radius_of_gyration(points) -> np.ndarray:
     -------
     ndarray of float64, (n,)
     """
-    p = np.ascontiguousarray(points, dtype=np.float64)
-    if p.ndim != 2:
-        raise ValueError(f"points: expected an (n, dim) array, got shape {p.shape}")
-    return _prefix_gyration(p)
+    return _prefix_gyration(np.ascontiguousarray(checked_points(points, np.float64)))
 
 
 def _seed_distances(points) -> np.ndarray:
-    p = np.asarray(points, dtype=np.float64)
-    if p.ndim != 2 or len(p) == 0:
-        raise ValueError(f"points: expected a non-empty (n, dim) array, got shape {p.shape}")
-    return _distances(np.ascontiguousarray(p))
+    return _distances(np.ascontiguousarray(checked_points(points, np.float64)))
 
 
 @jit
@@ -155,10 +150,10 @@ def anisotropy(points, counts) -> np.ndarray:
     -------
     ndarray of float64, shaped like ``counts``; NaN for a prefix with no particle off the seed.
     """
-    p = np.asarray(points, dtype=np.float64)
+    p = checked_points(points, np.float64)
     counts = np.asarray(counts, dtype=np.int64)
-    if p.ndim != 2 or len(p) == 0 or counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
-        raise ValueError("points, counts: expected a non-empty (n, dim) array and counts in 1..n")
+    if counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
+        raise ValueError(f"counts: expected prefix lengths in 1..{len(p)}")
     return _anisotropy(np.ascontiguousarray(p), counts.ravel()).reshape(counts.shape)
 
 

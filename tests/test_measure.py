@@ -73,13 +73,11 @@ def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, lattice, c
 
 
 ROUTES = {
-    # How the sides counted from the particles are counted: the settings that
-    # force it, and the kernel (name, test on its arguments) whose call shows it ran.
-    "strips of sites": ({}, ("_mark_sites", lambda args: True)),
-    "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, ("_mark_boxes", lambda args: len(args[6]) > 1)),
-    "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12},
-                              ("_mark_boxes", lambda args: args[5] > 0 and len(args[6]) > 0)),
-    "boxes sorted": ({"_BITMAP_CAP": 0}, ("_mark_boxes", lambda args: len(args[6]) == 0)),
+    # How the sides counted from the particles are counted: the settings that force it, and its code.
+    "strips of sites": ({}, boxes.STRIPS),
+    "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, boxes.ONE_PASS),
+    "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12}, boxes.PASSES),
+    "boxes sorted": ({"_BITMAP_CAP": 0}, boxes.SORTED),
 }
 
 
@@ -95,22 +93,65 @@ def test_every_route_from_the_particles_matches_reference(monkeypatch, dim, kind
     # sides halved from them (or, where those do not fit, counted likewise).
     lattice = kind != "disks"
     points = random_set(dim, kind == "sites", 200 if lattice else 60, 40 if dim == 2 else 16, dim)
-    settings, (kernel, took) = ROUTES[route]
+    settings, code = ROUTES[route]
     for name, value in settings.items():
         monkeypatch.setattr(boxes, name, value)
-    calls = []
-    run = getattr(boxes, kernel)
-    monkeypatch.setattr(boxes, kernel, lambda *args: calls.append(args) or run(*args))
-    scales, counts = box_counts(points, lattice=lattice)
-    assert any(took(args) for args in calls), "the route did not run"
-    offsets = naive.grid_offsets(scales)
-    np.testing.assert_array_equal(counts, [naive.box_count(points, s, lattice, offsets[int(s)]) for s in scales])
+    counted = boxes.PrefixBoxes(points, None, lattice, None, 4)
+    counted.count()
+    assert code in counted.routes[0], "the route did not run"
+    offsets = naive.grid_offsets(counted.scales)
+    np.testing.assert_array_equal(counted.counts[0], [naive.box_count(points, s, lattice, offsets[int(s)])
+                                                      for s in counted.scales])
+    np.testing.assert_array_equal(box_counts(points, lattice=lattice)[1], counted.counts[0])
 
 
 def occupied(stack, shape):
     """Each grid's occupied boxes (rows of box indices, sorted) from its bitmap in ``stack``."""
     bits = np.unpackbits(stack.view(np.uint8), axis=-1, bitorder="little")[..., : shape[-1]]
     return [np.argwhere(grid.reshape(tuple(shape))) for grid in bits]
+
+
+def slab(shape):
+    """A grid's shape on the kernels' three axes (a 2D grid has one box on axis 0)."""
+    return (1,) * (3 - len(shape)) + tuple(int(n) for n in shape)
+
+
+def bitmaps(shape, grids):
+    padded = slab(shape)
+    return np.zeros((grids, padded[0] * padded[1], -(-padded[2] // 64)), np.uint64)
+
+
+def marked(points, side, offsets, radius):
+    """Every grid of ``side`` marked from the particles, in one pass: their bitmaps and shape."""
+    shape = np.floor((points.max(axis=0) + radius + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
+    stack = bitmaps(shape, len(offsets) ** points.shape[1])
+    boxes._mark_boxes(points.astype(float), np.array(offsets), float(side), radius, slab(shape), 0, stack,
+                      np.empty((0, 0), np.int64))
+    return stack, shape
+
+
+def merged(points, side, offsets):
+    """Every grid of ``side`` merged from strips of integer sites (one per offset on the last axis)."""
+    dim, high = points.shape[1], points.max(axis=0)
+    shape = np.floor((high + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
+    cells = np.r_[high[:-1] + 1, shape[-1]]
+    strips = bitmaps(cells, len(offsets))
+    boxes._mark_sites(points, np.array(offsets), float(side), tuple(int(n) for n in cells[:-1]), strips)
+    part, shift = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
+    part[2], shift[3 - dim : 2] = np.arange(len(offsets)), offsets
+    stack = bitmaps(shape, len(offsets) ** dim)
+    count = boxes._coarsen(strips, slab(cells), part, shift, slab((side,) * (dim - 1) + (1,)), stack, slab(shape))
+    return count, stack, shape
+
+
+def halved(fine, fine_shape, fine_offsets, side, offsets):
+    """Every grid of ``side`` from those of half the side (``fine``)."""
+    dim = len(fine_shape)
+    shape = fine_shape // 2 + 1
+    part, shift = boxes._halving(fine_offsets, side // 2, offsets, dim)
+    stack = bitmaps(shape, len(offsets) ** dim)
+    count = boxes._coarsen(fine, slab(fine_shape), part, shift, slab((2,) * dim), stack, slab(shape))
+    return count, stack, shape
 
 
 @pytest.mark.parametrize("lattice", [True, False])
@@ -120,24 +161,21 @@ def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(d
     # several words (bits move between words when a halved grid is shifted).
     points = random_set(dim, lattice, 3000 if dim == 2 else 6000, 300 if dim == 2 else 70, 11)
     points = points - points.min(axis=0)
-    high, radius = points.max(axis=0), 0.0 if lattice else 0.5
+    radius = 0.0 if lattice else 0.5
     offsets = {s: sorted(o) for s, o in naive.grid_offsets([1, 2, 4, 3, 6, 12]).items()}
-
-    def marked(side):
-        # Floating-point coordinates are never put in strips.
-        _, stack, shape = boxes._from_points(points.astype(float), high, offsets[side], side, radius, keep=True)
-        return occupied(stack, shape)
-
     for base in (1, 3):
-        count, stack, shape = boxes._from_points(points, high, offsets[base], base, radius, keep=True)
+        stack, shape = marked(points, base, offsets[base], radius)
+        count = min(map(len, occupied(stack, shape)))
+        if lattice and base > 1:  # integer sites: the grids merged from strips, as the lattice measures them
+            count, stack, shape = merged(points, base, offsets[base])
         for side in (base, 2 * base, 4 * base):
             if side > base:
-                count, stack, shape = boxes._halve(stack, shape, offsets[side // 2], side, offsets[side])
-            expected = marked(side)
+                count, stack, shape = halved(stack, shape, offsets[side // 2], side, offsets[side])
+            expected = occupied(*marked(points, side, offsets[side], radius))
             assert len(occupied(stack, shape)) == len(expected) == len(offsets[side]) ** dim
             for got, want in zip(occupied(stack, shape), expected):
                 np.testing.assert_array_equal(got, want)
-            assert count == min(len(boxes) for boxes in expected)
+            assert count == min(len(grid) for grid in expected)
 
 
 SELF_SIMILAR = {
@@ -290,9 +328,16 @@ def test_default_scales_are_families_of_whole_sides_from_one_to_the_extent():
     np.testing.assert_array_equal(counts, [2, 1, 1])
 
 
+@pytest.mark.parametrize("measure_of", [box_counts, radius_of_gyration, max_radius,
+                                        lambda points: measure.anisotropy(points, [1])])
+@pytest.mark.parametrize("points, why", [(np.zeros((5, 4)), "got shape"), (np.zeros((0, 2)), "got shape"),
+                                          (np.zeros(5), "got shape"), ([[0.0, 1.0], [np.nan, 0.0]], "finite")])
+def test_every_measure_refuses_bad_points_alike(measure_of, points, why):
+    with pytest.raises(ValueError, match=f"^points: .*{why}"):
+        measure_of(points)
+
+
 def test_bad_input_is_refused():
-    with pytest.raises(ValueError, match="points"):
-        box_counts(np.zeros((5, 4)))
     with pytest.raises(ValueError, match="scales"):
         box_counts(np.zeros((5, 2)), scales=[0.5, 1])
     with pytest.raises(ValueError, match="scales"):  # whole sides only
@@ -406,7 +451,7 @@ def test_every_prefix_counted_at_once_equals_box_counts_of_that_prefix(dim, latt
 @pytest.mark.parametrize("dim", [2, 3])
 def test_every_prefix_at_once_takes_the_routes_box_counts_takes(monkeypatch, dim, lattice, cap):
     # Small caps send sides to the particles, a few grids at a time, or (0)
-    # back to box_counts, which sorts their boxes; strips of sites are tried
+    # to sorting their boxes; strips of sites are tried
     # with and without their cost rule.
     points = random_set(dim, True, 1500 if dim == 2 else 400, 100 if dim == 2 else 20, 5)
     if not lattice:
