@@ -55,15 +55,18 @@ FULL_COUNT = 10_000_000
 HUGE_COUNT = 100_000_000
 """``--huge`` adds this N for the 2D models (tens of minutes each)."""
 TARGETS = {
-    "offlattice-2d": {"seconds": {10**6: 10, 10**7: 130, 10**8: 1800}, "peak_mb": {10**7: 400, 10**8: 4000}},
-    "lattice-2d": {"seconds": {10**6: 6, 10**7: 90, 10**8: 1200}, "peak_mb": {10**7: 350, 10**8: 3000}},
-    "lattice-3d": {"seconds": {10**6: 12, 10**7: 200}, "peak_mb": {10**7: 1000}},
-    "offlattice-3d": {"seconds": {10**6: 25, 10**7: 400}, "peak_mb": {10**7: 1500}},
+    "lattice-2d": {"seconds": {10**7: 60, 10**8: 900}, "bytes": {10**7: 20, 10**8: 20}, "exponent": 1.06},
+    "offlattice-2d": {"seconds": {10**7: 90, 10**8: 1200}, "bytes": {10**7: 28, 10**8: 28}, "exponent": 1.06},
+    "lattice-3d": {"seconds": {10**7: 180}, "bytes": {10**7: 48}, "exponent": 1.10},
+    "offlattice-3d": {"seconds": {10**7: 300}, "bytes": {10**7: 48}, "exponent": 1.10},
 }
-"""Issue 14's targets on one core: seconds to grow (compile excluded) and
-peak memory of the process (MiB) at each N."""
-EXPONENT_TARGET = (10**5, 10**7, 1.10)
-"""Cost exponent of the 2D models fitted from the first N to the second, and its target."""
+"""Issue 25's targets on one core: seconds to grow (compile excluded) and
+memory added by growth per particle (bytes) at each N, and the cost exponent
+over ``SCALING``."""
+SCALING = (10**5, 10**7)
+"""The cost exponent is fitted from the first N to the second, and steps per particle compared between them."""
+STEPS_GROWTH_TARGET = 1.40
+"""Steps per particle may grow at most like log N: from 1e5 to 1e7 by at most 40%."""
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
 
@@ -178,13 +181,14 @@ def _power(n: int) -> str:
 
 
 def target_table(ds: xr.Dataset) -> list[str]:
-    """Issue 14's table: seconds at 1e6, 1e7, 1e8, peak memory at 1e7 and 1e8,
-    and the 2D cost exponent, each beside its target (markdown rows)."""
+    """Issue 25's table: seconds at 1e7 and 1e8, memory added per particle
+    there, the cost exponent and the growth of steps per particle from 1e5
+    to 1e7, each beside its target (markdown rows)."""
     counts = sorted({n for t in TARGETS.values() for n in t["seconds"]})
-    peaks = sorted({n for t in TARGETS.values() for n in t["peak_mb"]})
-    lo, hi, most = EXPONENT_TARGET
-    head = ["model", *(f"{_power(n)} s" for n in counts), *(f"peak MB at {_power(n)} (added)" for n in peaks),
-            f"cost exponent {_power(lo)} to {_power(hi)}"]
+    sizes = sorted({n for t in TARGETS.values() for n in t["bytes"]})
+    lo, hi = SCALING
+    head = ["model", *(f"{_power(n)} s" for n in counts), *(f"bytes/particle at {_power(n)}" for n in sizes),
+            f"cost exponent {_power(lo)} to {_power(hi)}", f"steps/particle {_power(hi)} over {_power(lo)}"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, target in TARGETS.items():
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
@@ -197,16 +201,19 @@ def target_table(ds: xr.Dataset) -> list[str]:
         for n in counts:
             r = at(n)
             row.append("" if r is None else f"{float(r.seconds):.1f}{_verdict(float(r.seconds), target['seconds'].get(n))}")
-        for n in peaks:
+        for n in sizes:
             r = at(n)
-            row.append("" if r is None else f"{float(r.peak_memory):.0f} ({float(r.added_memory):.0f})"
-                       f"{_verdict(float(r.peak_memory), target['peak_mb'].get(n))}")
-        fit = exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
-        if "2d" in name and fit.sizes["run"] >= 2 and int(fit.n.max()) == hi:
-            slope = np.polyfit(np.log(fit.n.values.astype(float)), np.log(fit.seconds.values), 1)[0]
-            row.append(f"{slope:.2f}{_verdict(slope, most)}")
+            per = None if r is None else float(r.added_memory) * 2**20 / n
+            row.append("" if r is None else f"{per:.1f}{_verdict(per, target['bytes'].get(n))}")
+        first, last = at(lo), at(hi)
+        if first is None or last is None:
+            row += ["", ""]
         else:
-            row.append("")
+            fit = exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
+            slope = np.polyfit(np.log(fit.n.values.astype(float)), np.log(fit.seconds.values), 1)[0]
+            growth = (float(last.walk_steps) / float(last.n_grown)) / (float(first.walk_steps) / float(first.n_grown))
+            row += [f"{slope:.2f}{_verdict(slope, target['exponent'])}",
+                    f"{growth:.2f}{_verdict(growth, STEPS_GROWTH_TARGET)}"]
         lines.append("| " + " | ".join(row) + " |")
     return lines
 

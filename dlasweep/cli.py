@@ -154,7 +154,7 @@ def _parser() -> argparse.ArgumentParser:
     timing.add_argument("-o", "--output", type=Path, default=Path("results/bench"), help="output folder")
     size = timing.add_mutually_exclusive_group()
     size.add_argument("--full", action="store_true",
-                      help="add N = 1e7 for every model and print the table of issue 14's targets")
+                      help="add N = 1e7 for every model and print the table of issue 25's targets")
     size.add_argument("--huge", action="store_true", help="--full, and N = 1e8 for the 2D models (hours)")
     size.add_argument("--quick", action="store_true", help="only the smallest N (a smoke test)")
     timing.set_defaults(handler=_bench)

@@ -202,3 +202,14 @@ def min_pair(points, params):
         tree = cKDTree(p)
         return min(tree.query(p + s, k=2)[0][:, 1 if not s.any() else 0].min() for s in shifts)
     return cKDTree(p).query(p, k=2)[0][:, 1].min()
+
+
+def field_distances(field, dim, fw, cap):
+    """The distances a kernel's distance field (``maps.field_cell``'s tiles,
+    ``cap - distance`` stored) holds, as an array of ``fw`` cells a side, axes in order."""
+    from dlasweep.kernels import maps
+
+    out = np.zeros((fw,) * dim, np.int64)
+    for c in np.ndindex(*out.shape):
+        out[c] = cap - int(field[maps.field_cell(dim, fw, *c, *([0] * (3 - dim)))])
+    return out

@@ -40,20 +40,26 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
 def test_target_table_compares_each_figure_with_its_target():
     from dlasweep.bench import _to_dataset, _verdict, target_table
 
-    rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n, "steps": n,
-                 "status": "ok", "peak_mb": 200.0 + n / 1e5, "added_mb": n / 1e5}
-            for n in (10**5, 10**6, 10**7)]
-    rows.append({"model": "offlattice-3d", "method": "exact", "n": 10**6, "seconds": 20.0, "n_grown": 10**6, "steps": 1,
-                     "status": "ok", "peak_mb": 250.0, "added_mb": 50.0})
-    table = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in target_table(_to_dataset(rows))}
+    # time as N^1.2, steps per particle 10, 12, 14.4, 2**20 bytes per 1e5 particles added
+    rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
+             "steps": int(n * 10 * 1.2 ** k), "status": "ok", "peak_mb": 200.0 + n / 1e5, "added_mb": n / 1e5}
+            for k, n in enumerate((10**5, 10**6, 10**7))]
+    rows.append({"model": "offlattice-3d", "method": "exact", "n": 10**7, "seconds": 250.0, "n_grown": 10**7,
+                 "steps": 10**9, "status": "ok", "peak_mb": 500.0, "added_mb": 300.0})
+    lines = target_table(_to_dataset(rows))
+    assert lines[0] == ("| model | 1e7 s | 1e8 s | bytes/particle at 1e7 | bytes/particle at 1e8 | cost exponent 1e5 to 1e7 "
+                        "| steps/particle 1e7 over 1e5 |")
+    table = {line.split(" | ")[0].strip("| "): [c.strip(" |") for c in line.split(" | ")] for line in lines[2:]}
     lattice = table["lattice-2d"]
-    assert lattice[1] == "31.7 (<= 6: 428% over)"
-    assert lattice[2] == "502.4 (<= 90: 458% over)"
-    assert lattice[4] == "300 (100) (<= 350: met)"
-    assert lattice[6].rstrip(" |") == "1.20 (<= 1.1: 9% over)"
+    assert lattice[1] == "502.4 (<= 60: 737% over)"
+    assert lattice[2] == ""  # no 1e8 run
+    assert lattice[3] == "10.5 (<= 20: met)"
+    assert lattice[5] == "1.20 (<= 1.06: 13% over)"
+    assert lattice[6] == "1.44 (<= 1.4: 3% over)"
     assert _verdict(130.6, 130) == " (<= 130: 0.5% over)" and _verdict(130, 130) == " (<= 130: met)"
-    assert table["offlattice-3d"][1] == "20.0 (<= 25: met)"
-    assert table["offlattice-3d"][6].rstrip(" |") == ""  # no exponent for 3D, nor without 1e7
+    assert table["offlattice-3d"][1] == "250.0 (<= 300: met)"
+    assert table["offlattice-3d"][3] == "31.5 (<= 48: met)"
+    assert table["offlattice-3d"][5:] == ["", ""]  # no 1e5 run: no exponent, no growth
 
 
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():

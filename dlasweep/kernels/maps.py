@@ -1,17 +1,20 @@
-"""Bit-packed occupancy grids and hierarchical distance maps (Ossadnik).
+"""Bit-packed occupancy grids, hierarchical maps and distance pyramids (Ossadnik).
 
 A grid covers the cube ``[-off, W - off)^dim`` of unit cells. Segment 0 is a
 plain occupancy bit per cell; segment ``s >= 1`` is a *dilated* map of cells
 of side ``2**s``: a cell is set when a particle lies in it or in one of its
 ``3**dim - 1`` neighbours. A walker whose level-``s`` cell is clear is more
-than ``2**s`` (Chebyshev, so also Euclidean) from every particle, and because
-the dilated sets are nested, the largest clear level is found by a local
-search from the walker's previous level (``free_bound``).
+than ``2**s`` (Chebyshev, so also Euclidean) from every particle.
 
-Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, so a 2D grid costs
-about 1.3 bits per cell in all, and memory follows the cluster, not a canvas.
-Near the cluster a coarse Chebyshev distance field (``field_*``, one byte per
-4x4 cells) gives a sharper bound than the power-of-two maps.
+Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, words in square
+tiles (``TILE_BITS``), and a grid's pages take memory only once written
+(``zeroed``): a 2D grid costs 1.3 bits per cell of the pages along the
+cluster (the lattice keeps segments 0 and 1 only), not of its bounding square.
+Near the cluster a coarse Chebyshev distance field (one byte per 4x4 cells)
+gives a sharper bound than the power-of-two maps; the distance pyramid
+(``pyramid_*``) stacks coarser fields above it, so that a walker far from the
+cluster reads a bound within a cell or two of the truth from a small array
+(beside periodic sides the off-lattice walk searches the maps instead).
 """
 
 import sys
@@ -43,6 +46,31 @@ def _no_advice(address, nbytes):
 
 _advise = _advise_huge_pages if sys.platform.startswith("linux") else _no_advice
 
+PAGE = 4096
+"""The memory page that ``zeroed`` hands back to the OS (x86-64 Linux; where pages are larger,
+``madvise`` refuses the unaligned range and ``zeroed`` writes its zeros)."""
+_MADV_DONTNEED = 4
+
+
+@jit
+def _release(address, nbytes):
+    """Hand the whole pages in [address, address + nbytes) back to Linux: they read
+    as zeros and take no memory until written. Returns the released range."""
+    lo = (address + np.uintp(PAGE - 1)) & ~np.uintp(PAGE - 1)
+    hi = (address + np.uintp(nbytes)) & ~np.uintp(PAGE - 1)
+    if hi > lo and _madvise(lo, hi - lo, np.int32(_MADV_DONTNEED)) == 0:
+        return lo - address, hi - address
+    return np.uintp(0), np.uintp(0)
+
+
+@jit
+def _keep(address, nbytes):
+    """Elsewhere than Linux: nothing released."""
+    return np.uintp(0), np.uintp(0)
+
+
+_release_pages = _release if sys.platform.startswith("linux") else _keep
+
 
 @jit
 def filled(n, value, dtype):
@@ -59,12 +87,40 @@ def filled(n, value, dtype):
     return a
 
 
+TILE_BITS = (0, 0, 4, 3)
+"""By dimension: words are stored in tiles of ``2**TILE_BITS`` words a side
+(2D 16x16 words, 128x128 sites, 2 KiB; 3D 8x8x8 words, 32**3 sites, 4 KiB),
+so that the words near a site share a few memory pages and a cluster
+touches the pages along it, not every row of the grid."""
+
+
 @jit
-def layout(dim, width):
-    """Start word, blocks per axis and cells per axis of every segment."""
+def zeroed(n, dtype):
+    """``np.zeros(n, dtype)`` whose pages take memory only once written.
+
+    numba's ``np.zeros`` writes every byte. Here the whole pages go back to
+    the OS (``madvise(MADV_DONTNEED)``), which maps them to zeros on demand:
+    a grid over the cluster's bounding square costs the pages the cluster
+    and its walkers write, not the square.
+    """
+    a = np.empty(n, dtype)
+    lo, hi = _release_pages(np.uintp(a.ctypes.data), np.uintp(a.nbytes))
+    if hi > lo:
+        b = a.view(np.uint8)
+        b[:lo] = 0
+        b[hi:] = 0
+    else:
+        a[:] = 0
+    return a
+
+
+@jit
+def layout(dim, width, most=64):
+    """Start word, blocks per axis and cells per axis of every segment (at most ``most``),
+    each segment a whole number of tiles."""
     block = 8 if dim == 2 else 4
     nseg = 1
-    while (width >> nseg) >= 2:
+    while (width >> nseg) >= 2 and nseg < most:
         nseg += 1
     start = np.zeros(nseg + 1, np.int64)
     blocks = np.zeros(nseg, np.int64)
@@ -74,16 +130,30 @@ def layout(dim, width):
         nb = (w + block - 1) // block
         cells[s] = w
         blocks[s] = nb
-        start[s + 1] = start[s] + nb**dim
+        tiles = (nb + (1 << TILE_BITS[dim]) - 1) >> TILE_BITS[dim]
+        start[s + 1] = start[s] + (tiles << TILE_BITS[dim]) ** dim
     return start, blocks, cells
+
+
+@jit
+def block_word(dim, base, nb, bx, by, bz):
+    """The word holding block (bx, by, bz) of a segment starting at ``base``, ``nb`` blocks a side."""
+    t = TILE_BITS[dim]
+    last = (1 << t) - 1
+    tiles = (nb + last) >> t
+    tile = (bx >> t) + tiles * ((by >> t) + (tiles * (bz >> t) if dim == 3 else 0))
+    inner = (bx & last) | ((by & last) << t)
+    if dim == 3:
+        inner |= (bz & last) << (2 * t)
+    return base + (tile << (dim * t)) + inner
 
 
 @jit
 def index(dim, base, nb, i, j, k):
     """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side."""
     if dim == 2:
-        return base + (i >> 3) + nb * (j >> 3), (i & 7) | ((j & 7) << 3)
-    return base + (i >> 2) + nb * ((j >> 2) + nb * (k >> 2)), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
+        return block_word(2, base, nb, i >> 3, j >> 3, 0), (i & 7) | ((j & 7) << 3)
+    return block_word(3, base, nb, i >> 2, j >> 2, k >> 2), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
 
 
 @jit
@@ -121,106 +191,71 @@ def mark(words, dim, start, blocks, cells, i, j, k):
 
 
 @jit
-def allocate(dim, width):
-    """An empty grid of side ``width``: (words, start, blocks, cells)."""
-    start, blocks, cells = layout(dim, width)
-    return filled(start[-1], 0, np.uint64), start, blocks, cells
-
-
-@jit
-def free_bound(words, dim, start, blocks, cells, i, j, k, guess):
-    """Largest clear level about cell (i, j, k) and the distance it guarantees.
-
-    The search starts at ``guess`` (a walker's previous level) and moves one
-    level at a time, which beats bisection for walkers that move locally.
-    A clear level ``s`` means no particle in the 3**dim block of level-``s``
-    cells around the walker's, so every particle is at least as far as the
-    nearest face of that block: ``2**s`` plus the walker's offset in its cell.
-
-    Returns
-    -------
-    level : int, 0 when even level 1 is set
-    bound : float, a lower bound on the distance from the centre of cell
-        (i, j, k) to the nearest marked cell (0 when level is 0)
-    """
-    top = len(cells) - 1
-    t = min(max(guess, 1), top)
-    step = 0  # +1 climbing while clear, -1 descending while set
-    s = 0
-    while 1 <= t <= top:
-        # the word is read here, not by a helper taking the array, which
-        # would cost atomic reference counting per level
-        w, b = index(dim, start[t], blocks[t], i >> t, j >> t, k >> t)
-        clear = (words[w] >> np.uint64(b)) & np.uint64(1) == np.uint64(0)
-        if step == 0:
-            step = 1 if clear else -1
-        if clear:
-            s = t
-        if clear == (step < 0):
-            break
-        t += step
-    # one exit: numba then drops the reference counting of the arrays
-    side = 1 << s
-    mask = side - 1
-    near = min(i & mask, side - 1 - (i & mask), j & mask, side - 1 - (j & mask))
-    if dim == 3:
-        near = min(near, k & mask, side - 1 - (k & mask))
-    return s, float(side + near) + 0.5 if s > 0 else 0.0
+def allocate(dim, width, most=64):
+    """An empty grid of side ``width`` with at most ``most`` segments: (words, start, blocks, cells)."""
+    start, blocks, cells = layout(dim, width, most)
+    return zeroed(start[-1], np.uint64), start, blocks, cells
 
 
 FIELD_SHIFT = 2
 """The distance field works on coarse cells of side ``2**FIELD_SHIFT``."""
+FIELD_TILE = (0, 0, 6, 4)
+"""By dimension: a field's cells are stored in tiles of ``2**FIELD_TILE`` cells
+a side, 4 KiB each (a memory page), so that the cells within a cap of the
+cluster share pages and the rest are never written."""
 
 
 @jit
-def field_allocate(dim, width, cap):
-    """A coarse Chebyshev distance field, every cell at the cap (nothing near)."""
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    return filled(fw**dim, cap, np.uint8)
+def field_cell(dim, fw, ci, cj, ck):
+    """Index of cell (ci, cj, ck) in a field of ``fw`` cells a side, stored by tiles."""
+    t = FIELD_TILE[dim]
+    last = (1 << t) - 1
+    tiles = (fw + last) >> t
+    tile = (ci >> t) + tiles * ((cj >> t) + (tiles * (ck >> t) if dim == 3 else 0))
+    inner = (ci & last) | ((cj & last) << t)
+    if dim == 3:
+        inner |= (ck & last) << (2 * t)
+    return (tile << (dim * t)) + inner
 
 
 @jit
-def field_mark(field, dim, width, i, j, k, cap):
-    """Record a particle in cell (i, j, k): lower the distances within ``cap``.
+def field_size(dim, fw):
+    """Cells a field of ``fw`` cells a side holds, whole tiles."""
+    t = FIELD_TILE[dim]
+    return (((fw + (1 << t) - 1) >> t) << t) ** dim
 
-    ``field[c]`` is the Chebyshev distance, in coarse cells and capped, from
-    cell ``c`` to the nearest coarse cell holding a particle; sharper than the
-    dilated maps near the cluster, where most jumps happen.
+
+@jit
+def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
+    """Lower the distances within ``reach`` (at most ``cap``) about a particle in cell (ci, cj, ck).
+
+    A field stores ``cap - distance``: zero is the cap, so a page that no
+    particle came within reach of is never written and takes no memory.
     """
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    ci, cj, ck = i >> FIELD_SHIFT, j >> FIELD_SHIFT, (k >> FIELD_SHIFT if dim == 3 else 0)
-    if field[ci + fw * (cj + fw * ck)] != 0:
-        field_lower(field, dim, fw, cap, ci, cj, ck)
-
-
-@jit
-def field_lower(field, dim, fw, cap, ci, cj, ck):
-    """Lower the distances within ``cap`` about a particle in coarse cell (ci, cj, ck).
-
-    ``fw`` is the field's side in coarse cells.
-    """
-    reach = cap - 1
+    reach -= 1
     klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
     for c in range(klo, khi + 1):
         dk = abs(c - ck)
         for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
             dj = max(dk, abs(b - cj))
-            row = fw * (b + fw * c)
-            # branchless, so that the compiler vectorises the row
             for a in range(max(ci - reach, 0), min(ci + reach, fw - 1) + 1):
-                field[row + a] = min(field[row + a], np.uint8(max(dj, abs(a - ci))))
+                here = field_cell(dim, fw, a, b, c)
+                near = np.uint8(cap - max(dj, abs(a - ci)))
+                if field[here] < near:
+                    field[here] = near
 
 
 @jit
-def field_fill(field, dim, width, cap):
-    """Fill in the field's distances from its zero cells (the rest at ``cap``).
+def _fill(field, dim, fw, cap):
+    """Fill in the distances of a field of side ``fw`` cells from its zero
+    cells (the rest at ``cap``), stored as ``field_lower`` stores them.
 
     Two raster passes, each taking the minimum over the half of the
     3**dim - 1 neighbours already visited, give the exact Chebyshev distance;
-    a whole grid costs a few operations per cell instead of ``field_mark``'s
-    ``(2 cap - 1)**dim`` per particle, so a rebuild uses this.
+    a whole grid costs a few operations per cell instead of ``field_lower``'s
+    ``(2 cap - 1)**dim`` per particle, so a rebuild uses this. Only cells
+    within the cap are written.
     """
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
     nz = fw if dim == 3 else 1
     for sweep in range(2):
         g = 1 - 2 * sweep  # +1 forward, -1 backward
@@ -230,9 +265,9 @@ def field_fill(field, dim, width, cap):
                 b = bb if g > 0 else fw - 1 - bb
                 for aa in range(fw):
                     a = aa if g > 0 else fw - 1 - aa
-                    here = a + fw * (b + fw * c)
-                    v = np.int64(field[here])
-                    if v == 0:
+                    here = field_cell(dim, fw, a, b, c)
+                    u = np.int64(field[here])
+                    if u == cap:
                         continue
                     # neighbours (dc, db, da) before this cell in the pass's order
                     for dc in range(-1 if dim == 3 else 0, 1):
@@ -240,13 +275,121 @@ def field_fill(field, dim, width, cap):
                             for da in range(-1, 2 if dc < 0 or db < 0 else 0):
                                 n0, n1, n2 = a + g * da, b + g * db, c + g * dc
                                 if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
-                                    v = min(v, np.int64(field[n0 + fw * (n1 + fw * n2)]) + 1)
-                    field[here] = min(v, cap)
+                                    u = max(u, np.int64(field[field_cell(dim, fw, n0, n1, n2)]) - 1)
+                    if u > field[here]:
+                        field[here] = u
+
+
+PYRAMID_STEP = (0, 0, 2, 1)
+"""By dimension: each level of the distance pyramid has cells ``2**PYRAMID_STEP``
+times wider than the level below; level 0 is the field (cells of
+``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps."""
 
 
 @jit
-def field_get(field, dim, width, i, j, k):
-    """The field's value at site (i, j, k): coarse cells to the nearest particle's, capped."""
-    fw = (width + (1 << FIELD_SHIFT) - 1) >> FIELD_SHIFT
-    ck = k >> FIELD_SHIFT if dim == 3 else 0
-    return np.int64(field[(i >> FIELD_SHIFT) + fw * ((j >> FIELD_SHIFT) + fw * ck)])
+def pyramid_starts(dim, width, cap, most=64):
+    """Where each level of the pyramid of a grid of side ``width`` starts in
+    its array (and the end): enough levels that the top one's capped distance
+    spans the grid, at most ``most``."""
+    levels = 1
+    while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width and levels < most:
+        levels += 1
+    start = np.zeros(levels + 1, np.int64)
+    for level in range(levels):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        start[level + 1] = start[level] + field_size(dim, (width + (1 << shift) - 1) >> shift)
+    return start
+
+
+@jit
+def pyramid_allocate(dim, width, cap, most=64):
+    """The field with coarser fields above it, one array, every cell at the cap.
+
+    Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
+    starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
+    """
+    return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)
+
+
+@jit
+def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
+    """Record a particle in cell (i, j, k) on every level: lower the distances
+    within ``reach`` (the cap, or 1 to mark only the particle's own cells for
+    ``pyramid_fill``). A level whose cell already holds a particle has every
+    coarser one marked too."""
+    start = pyramid_starts(dim, width, cap, most)
+    for level in range(len(start) - 1):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        fw = (width + (1 << shift) - 1) >> shift
+        ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
+        if pyramid[start[level] + field_cell(dim, fw, ci, cj, ck)] == cap:
+            break
+        field_lower(pyramid[start[level]:start[level + 1]], dim, fw, cap, reach, ci, cj, ck)
+
+
+@jit
+def pyramid_fill(pyramid, dim, width, cap):
+    """``_fill`` on every level of the pyramid."""
+    start = pyramid_starts(dim, width, cap)
+    for level in range(len(start) - 1):
+        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+        _fill(pyramid[start[level]:start[level + 1]], dim, (width + (1 << shift) - 1) >> shift, cap)
+
+
+@jit
+def pyramid_low(dim, cap):
+    """The smallest value of a level ``l >= 1`` that makes it the sharpest:
+    the level below is then at its cap, and bounds less."""
+    return (cap - 2) // (1 << PYRAMID_STEP[dim]) + 2
+
+
+@jit
+def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
+    """The level of the pyramid that bounds the distance from cell (i, j, k)
+    best, and its value there, searched from level ``guess``.
+
+    A level's value v (cells, capped) puts every particle ``(v - 1) * side + 1``
+    sites or more away, Chebyshev. Values rise towards the finer levels, and
+    a level at ``low`` or more bounds at least as well as every finer one
+    (``pyramid_low``), so the answer is the coarsest level at ``low`` or more
+    (level 0 when none is). Walkers move locally: from the previous answer
+    the search takes a read or two, and the coarse levels it reads for a
+    walker far from the cluster are small enough to stay in cache.
+
+    Returns
+    -------
+    level : int
+    value : int
+    """
+    top = len(start) - 2
+    level = min(guess, top)
+    value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
+    if value >= low:
+        while level < top:
+            up = _level_value(pyramid, start, dim, width, cap, level + 1, i, j, k)
+            if up < low:
+                break
+            level += 1
+            value = up
+    else:
+        while level > 0 and value < low:
+            level -= 1
+            value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
+    return level, value
+
+
+@jit
+def pyramid_bound(dim, level, value):
+    """The Chebyshev distance in sites that ``value`` (at least 1) at ``level``
+    guarantees from a cell to every particle: ``value - 1`` whole cells
+    between, plus one site. (Adding the walker's way to its own cell's face,
+    measured: 8% more steps a particle at 1e6 in 2D, not fewer.)"""
+    return ((value - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * level)) + 1
+
+
+@jit
+def _level_value(pyramid, start, dim, width, cap, level, i, j, k):
+    shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
+    fw = (width + (1 << shift) - 1) >> shift
+    ck = k >> shift if dim == 3 else 0
+    return cap - np.int64(pyramid[start[level] + field_cell(dim, fw, i >> shift, j >> shift, ck)])

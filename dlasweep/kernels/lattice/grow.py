@@ -7,7 +7,10 @@ lattice walk first leaves the square (cube) of half-width ``d - 1`` around it
 (``exits``): no site inside touches the cluster, so this is exact, and every
 contact is still a lattice contact. Within two sites it takes single steps.
 ``d`` comes from the bit-packed occupancy words near the walker (``words``),
-the coarse Chebyshev distance field and the hierarchical maps (``maps``).
+else from the distance pyramid (``maps.pyramid_find``): coarse Chebyshev
+distance fields, each level's cells four (3D: two) times wider, so that a
+walker far from the cluster reads a bound within a cell or two of the truth
+from an array that stays in cache.
 Far from the cluster (beyond the distances the tables cover) the walker moves
 by walk-on-circles/spheres jumps, which treat the lattice walk as Brownian at
 scales of ``CIRCLE_MIN`` sites and more; outside the launch circle it returns
@@ -272,7 +275,11 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     top = TABLE_MAX[dim]
     group = 8 if dim == 2 else 48  # symmetries of the square (cube)
     rounding = 0.5 * np.sqrt(dim)  # how far a site can be from the point it rounds
-    field_far = ((FIELD_CAP[dim] - 1) << maps.FIELD_SHIFT) + 1  # the field's largest bound
+    cap = FIELD_CAP[dim]
+    low = maps.pyramid_low(dim, cap)
+    levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
+    fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT  # the field's side
+    level = 0  # the pyramid's level that bounded the walker's distance last
     nb0, base1, nb1 = blocks[0], start[1], blocks[1]
     nm = moves.shape[0]
     cube = np.zeros(27, np.uint64)
@@ -287,7 +294,6 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     box_hi = size - 1 if line else hi
     need_launch = True
     stuck = False
-    level = 1
     regrid = False
     while count < n:
         if regrid:
@@ -298,6 +304,8 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
             grid = (words, start, blocks, cells, field, width, off)
             nb0, base1, nb1 = blocks[0], start[1], blocks[1]
+            levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
+            fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
             regrid = False
         if max_steps > 0 and total >= max_steps:
             status = codes.STEP_LIMIT
@@ -368,11 +376,20 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                 break
             i, j, k = q[0] + off, q[1] + off, q[2] + off
             ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
-            # a clear level-1 cell: no particle within two sites
             near = False
             if ingrid:
-                cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
-                near = (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
+                cell = low
+                if level == 0:
+                    # the field, read here: most walkers are near the cluster, and a
+                    # call that passes the arrays costs reference counting
+                    ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+                if cell >= low:
+                    level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
+                if level == 0 and cell <= 1:
+                    # a set level-1 cell: a particle may lie within two sites
+                    cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
+                    near = (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0)
             if near or (line and q[up] <= 1):
                 # >>> touches, then step_to, spelled out: calls that pass arrays
                 # would cost reference counting (a test holds the texts together)
@@ -414,26 +431,22 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                 budget -= 1
                 continue
             # Chebyshev distance to the cluster, at least 3 here (the level-1
-            # cell is clear): exact within a few sites (the words), then the
-            # field, then the maps
+            # cell is clear): exact within a few sites (the words), else the
+            # pyramid's level
             if ingrid:
-                cell = maps.field_get(field, dim, width, i, j, k)
-                if cell > 1:
-                    d = ((cell - 1) << maps.FIELD_SHIFT) + 1
+                if level > 0 or cell > 1:
+                    d = maps.pyramid_bound(dim, level, cell)
                 elif dim == 2:
                     bx, by = i >> 3, j >> 3
                     d = fine2(
-                        word_at(words, nb0, bx - 1, by - 1, 0), word_at(words, nb0, bx, by - 1, 0),
-                        word_at(words, nb0, bx + 1, by - 1, 0), word_at(words, nb0, bx - 1, by, 0),
-                        words[bx + nb0 * by], word_at(words, nb0, bx + 1, by, 0),
-                        word_at(words, nb0, bx - 1, by + 1, 0), word_at(words, nb0, bx, by + 1, 0),
-                        word_at(words, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
+                        word_at(words, 2, nb0, bx - 1, by - 1, 0), word_at(words, 2, nb0, bx, by - 1, 0),
+                        word_at(words, 2, nb0, bx + 1, by - 1, 0), word_at(words, 2, nb0, bx - 1, by, 0),
+                        words[maps.block_word(2, 0, nb0, bx, by, 0)], word_at(words, 2, nb0, bx + 1, by, 0),
+                        word_at(words, 2, nb0, bx - 1, by + 1, 0), word_at(words, 2, nb0, bx, by + 1, 0),
+                        word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                     )
                 else:
                     d = fine3(words, nb0, i, j, k, cube)
-                if d >= field_far:
-                    level, bound = maps.free_bound(words, dim, start, blocks, cells, i, j, k, level)
-                    d = max(d, np.int64(bound + 0.5))
             else:
                 d = 5  # every particle lies 4 sites inside the grid
             free = r - (h_max if line else r_max)  # Euclidean, from the float position

@@ -2,7 +2,8 @@
 exact Chebyshev distances a few sites out from whole 64-bit words.
 
 The grid is ``maps``' (segment 0 a bit per site, 8x8 or 4x4x4 sites per
-word, then the dilated levels) with a coarse distance field beside it; a
+word, then dilated level 1, which tells a walker within two sites) with the
+distance pyramid beside it (``maps.pyramid_*``); a
 site q of the lattice is cell q + ``off`` of the grid, whose side is
 ``width``. A substrate's periodic images are marked too.
 """
@@ -19,8 +20,8 @@ FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, i
 def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
     """Mark a particle at site q, with its periodic images for substrates.
 
-    ``cap`` 1 marks only the particle's own cell of the field (for
-    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``.
+    ``cap`` 1 marks only the particle's own cells of the distance pyramid
+    (for ``maps.pyramid_fill`` to complete), else ``FIELD_CAP[dim]``.
     """
     reach = 1 if period > 0 else 0
     zreach = reach if dim == 3 else 0
@@ -31,19 +32,19 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
             k = q[2] + off
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 maps.mark(words, dim, start, blocks, cells, i, j, k)
-                maps.field_mark(field, dim, width, i, j, k, cap)
+                maps.pyramid_mark(field, dim, width, i, j, k, FIELD_CAP[dim], cap)
 
 
 @jit
 def rebuild(points, count, dim, width, off, period):
-    words, start, blocks, cells = maps.allocate(dim, width)
-    field = maps.field_allocate(dim, width, FIELD_CAP[dim])
+    words, start, blocks, cells = maps.allocate(dim, width, 2)  # occupancy and level 1: the near test
+    field = maps.pyramid_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
     for p in range(count):
         for a in range(dim):
             q[a] = points[p, a]
         mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
-    maps.field_fill(field, dim, width, FIELD_CAP[dim])
+    maps.pyramid_fill(field, dim, width, FIELD_CAP[dim])
     return words, start, blocks, cells, field
 
 
@@ -96,10 +97,10 @@ def _row2(w0, w1, w2, t):
 
 
 @jit
-def word_at(words, nb, x, y, z):
+def word_at(words, dim, nb, x, y, z):
     """Word (x, y, z) of the occupancy segment, empty outside the grid."""
     inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
-    return words[x + nb * (y + nb * z)] if inside else np.uint64(0)
+    return words[maps.block_word(dim, 0, nb, x, y, z)] if inside else np.uint64(0)
 
 
 @jit
@@ -164,10 +165,12 @@ def fine3(words, nb, i, j, k, cube):
     any_set = np.uint64(0)
     for c in range(3):
         for b in range(3):
-            row = bx - 1 + nb * (by + b - 1 + nb * (bz + c - 1))
             for a in range(3):
                 # away from the grid's faces, no bounds to check
-                w = words[row + a] if inside else word_at(words, nb, bx + a - 1, by + b - 1, bz + c - 1)
+                if inside:
+                    w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
+                else:
+                    w = word_at(words, 3, nb, bx + a - 1, by + b - 1, bz + c - 1)
                 cube[a + 3 * (b + 3 * c)] = w
                 any_set |= w
     if any_set == 0:

@@ -12,7 +12,7 @@ The grid's geometry is two small arrays built by ``_layout``:
 gi: 0-2 index cells per axis, 3-5 tiles per axis, 6-8 map offsets,
     9 map width, 10-12 periodic axes, 13 tile bits, 14 tiles used,
     15 largest usable map level, 16 covered half-width (point) or height (line),
-    17 distance field cap (coarse cells)
+    17 distance field cap (coarse cells), 18 most levels of the distance pyramid
 gf: 0-2 index origin, 3-5 index inverse cell side, 6 period
 
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
@@ -40,7 +40,7 @@ INF = np.inf
 def _layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
     for point seeds, h_max for a substrate), with room to grow."""
-    gi = np.zeros(18, np.int64)
+    gi = np.zeros(19, np.int64)
     gf = np.zeros(8)
     tb = 3 if dim == 2 else 2
     gi[13] = tb
@@ -54,6 +54,7 @@ def _layout(dim, line, size, need):
         gi[9] = 2 * half
         gi[15] = 1 << 30
         gi[17] = FCAP[dim - 2]
+        gi[18] = 64
         for a in range(dim):
             gi[a] = half
             gi[6 + a] = half
@@ -65,6 +66,7 @@ def _layout(dim, line, size, need):
         gi[9] = max(size + 2 * LINE_PAD, top + 2)
         gi[15] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
         gi[17] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
+        gi[18] = 1  # so the field alone: a coarser level would reach beyond the pad
         m = size // 2
         for a in range(up):
             gi[a] = m
@@ -129,10 +131,10 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
                 # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
                 fw = (W + (1 << FS) - 1) >> FS
                 ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
-                fresh = field[ci + fw * (cj + fw * ck)] != 0
+                fresh = field[maps.field_cell(dim, fw, ci, cj, ck)] != gi[17]
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
                 if fresh:
-                    maps.field_lower(field, dim, fw, gi[17], ci, cj, ck)
+                    maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[17], gi[17], gi[18])
 
 
 @jit
@@ -174,7 +176,7 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     ntiles = gi[3] * gi[4] * gi[5]
     dirr = maps.filled(ntiles, -1, np.int32)
     heads = maps.filled(64 * (tiles + tiles // 4 + 64), -1, np.int32)
-    field = maps.filled(((gi[9] + (1 << FS) - 1) >> FS) ** dim, gi[17], np.uint8)
+    field = maps.pyramid_allocate(dim, gi[9], gi[17], gi[18])
     for i in range(count):
         heads = insert(i, pts, nxt, dim, gi, gf, dirr, heads)
         mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
@@ -209,7 +211,9 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     its cap), the largest clear map level s puts every particle outside the
     3**dim block of level-s cells around w: 2**s plus w's distance to its
     level-s cell's faces. Returns 0 when the level-1 cell is set (look
-    closer), -1 off the map. (``_walk`` spells this out inline.)
+    closer), -1 off the map. At the field's cap, away from periodic sides,
+    the distance pyramid above the field bounds instead of the maps
+    (``pyramid_dist``). (``_walk`` spells this out inline.)
     """
     W = gi[9]
     x0 = w[0]
@@ -225,7 +229,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
     fw = (W + (1 << FS) - 1) >> FS
-    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+    fd = gi[17] - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
     dm = 0.0
     if fd > 1:
         side = float(1 << FS)
@@ -233,6 +237,9 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         dm = (fd - 1) * side + f
     if 1 < fd < gi[17]:
         return dm
+    if fd >= gi[17] and gi[18] > 1:
+        pstart = maps.pyramid_starts(dim, W, gi[17], gi[18])
+        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[17], maps.pyramid_low(dim, gi[17])))
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
     lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
@@ -256,7 +263,8 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 @jit
 def walk_geometry(gi, cells, dim):
     """The grid's constants that ``walk_bound`` takes, worked out once per walk:
-    (periodic, m0, m1, m2, W, fw, fcap, flo, ftop)."""
+    (periodic, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low): ``pstart`` the
+    distance pyramid's level starts, ``low`` its ``maps.pyramid_low``."""
     ftop = min(len(cells) - 1, gi[15]) + 1
     fcap = gi[17]
     # a field at its cap puts every particle (cap - 1) coarse cells away, so
@@ -265,11 +273,25 @@ def walk_geometry(gi, cells, dim):
     while flo + 1 < ftop and (2 << (flo + 1)) <= (fcap - 1) << FS:
         flo += 1
     fw = (gi[9] + (1 << FS) - 1) >> FS
-    return gi[10] == 1, float(gi[6]), float(gi[7]), float(gi[8]), float(gi[9]), fw, fcap, flo, ftop
+    return (gi[10] == 1, float(gi[6]), float(gi[7]), float(gi[8]), float(gi[9]), fw, fcap, flo, ftop,
+            maps.pyramid_starts(dim, gi[9], fcap, gi[18]), maps.pyramid_low(dim, fcap))
 
 
 @jit
-def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, fcap, flo, ftop):
+def pyramid_dist(field, pstart, dim, W, X0, X1, X2, cap, low):
+    """Lower bound on the centre distance from grid point X to every particle
+    from the distance pyramid's levels above the field, 0 when none bounds
+    more than the field: every centre lies ``value - 1`` whole cells of the
+    level beyond X's own, plus X's way to its cell's nearest face."""
+    level, value = maps.pyramid_find(field, pstart, dim, W, int(X0), int(X1), int(X2), cap, low, 1)
+    if level == 0:
+        return 0.0
+    shift = FS + maps.PYRAMID_STEP[dim] * level
+    return (value - 1) * float(1 << shift) + face_gap(X0, X1, X2, dim, shift)
+
+
+@jit
+def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, fcap, flo, ftop, pstart, low):
     """``map_dist`` as the walk's hot loop computes it: the grid's constants
     from ``walk_geometry``, and w's periodic coordinates wrapped in place.
 
@@ -277,8 +299,9 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     reference counting, and numba's inlining cost as much).
 
     It searches the map levels only where the field leaves them open: a
-    particle within two coarse cells sets every level from 3 up, and at the
-    field's cap the levels up to ``flo`` are clear. A test holds it to
+    particle within two coarse cells sets every level from 3 up; at the
+    field's cap the pyramid bounds, or where the grid is periodic the map
+    levels above ``flo`` (those up to it are clear). A test holds it to
     ``map_dist`` on random grids.
     """
     fside = float(1 << FS)
@@ -298,7 +321,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     dm = -1.0
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
-        fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+        fd = fcap - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
         dm = 0.0
         if fd > 1:
             # no particle in the coarse cells within fd - 1 of the walker's
@@ -308,7 +331,10 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
         if fd <= 1:
             hi = min(ftop, 3)
         elif fd >= fcap:
-            lo, hi = flo, ftop
+            if len(pstart) > 2:
+                dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
+            else:
+                lo, hi = flo, ftop
         while hi - lo > 1:
             s = (lo + hi) >> 1
             j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
@@ -399,6 +425,6 @@ def no_grid():
     """An empty grid: the caller drops its old grid's arrays by taking this
     before it builds the new one (in a later pass of its loop; see the package docstring)."""
     z = np.zeros(1, np.int64)
-    return (np.zeros(18, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
+    return (np.zeros(19, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
             np.zeros(0, np.int32), np.zeros(0, np.uint8))
 

@@ -27,6 +27,7 @@ from .cells import (
     map_dist,
     mark,
     no_grid,
+    pyramid_dist,
     walk_geometry,
 )
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
@@ -94,7 +95,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     RL2 = RL * RL
     up = dim - 1
     r_max, extent, h_max = geo[0], geo[1], geo[2]
-    per, m0, m1, m2, W, fw, fcap, flo, ftop = walk_geometry(gi, cells, dim)
+    per, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low = walk_geometry(gi, cells, dim)
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
@@ -197,7 +198,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 dm = -1.0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    fd = np.int64(field[(i0 >> FS) + fw * ((i1 >> FS) + fw * (i2 >> FS))])
+                    fd = fcap - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
                     dm = 0.0
                     if fd > 1:
                         # no particle in the coarse cells within fd - 1 of the walker's
@@ -207,7 +208,10 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                     if fd <= 1:
                         hi = min(ftop, 3)
                     elif fd >= fcap:
-                        lo, hi = flo, ftop
+                        if len(pstart) > 2:
+                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
+                        else:
+                            lo, hi = flo, ftop
                     while hi - lo > 1:
                         s = (lo + hi) >> 1
                         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
