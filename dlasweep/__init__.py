@@ -15,7 +15,7 @@ from ._version import __version__
 # Every name loads on first use: growing a cluster (a benchmark probe, a
 # worker) carries no dask, xarray or matplotlib, and the command line
 # (``_entry``) starts before numba and numpy load, so Ctrl-C is one line then too.
-_LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "measure", "radius_of_gyration": "measure",
+_LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "boxes", "radius_of_gyration": "measure",
          "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
          "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "cluster_parents": "store",
          "read_cluster": "store", "export_cluster": "export",

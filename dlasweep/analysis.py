@@ -19,37 +19,20 @@ cluster of its own fit), a finite-cluster estimate that reads low.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
 import xarray as xr
 
 from . import branching
-from .fit import Fit, ensemble, fit_dimension, fit_mass_radius, mass_radius_counts, seed_interval
+from .config import MIN_CI_SEEDS, MIN_COUNT, PER_OCTAVE, RESAMPLES
+from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts,
+                  history_counts, mass_radius_counts, seed_interval)
 from .measure import radius_of_gyration
-from .params import PARAMETERS, STATUSES
+from .params import EXACT_METHOD, STATUSES
 from .selection import with_selected_clusters
 
-HISTORY_START = 50
-"""Smallest count on the local-slope curve: below, a cluster is a compact blob."""
-LOCAL_PER_OCTAVE = 8
-"""Counts per octave on the local-slope curve."""
-RESAMPLES = 1000
-"""Bootstrap resamples over seeds. Each interval draws its own stream (``_stream``), so that
-reruns agree and a statistic does not depend on which others were computed before it."""
-MIN_CI_SEEDS = 3
-"""Fewest clusters an interval over seeds needs; with fewer, every interval is NaN and says why.
-
-Over 2 seeds the spread has one degree of freedom: the interval would be
-+-12.7 standard errors (``fit.t95(1)``), wider than any difference in D it
-could resolve, and its coverage would rest wholly on the normality of one
-difference. From 3 seeds the t-scaled interval holds: measured on 600
-ensembles of growth histories of known D each (tests/test_analysis.py,
-lognormal seed-to-seed noise) it covers the true D in 95.0%, 93.8%, 94.8%,
-94.5%, 95.7% and 95.8% of ensembles of 3, 4, 6, 8, 10 and 16 seeds, where
-the percentile bootstrap it replaced covered 71%, 78%, 86%, 89%, 90% and
-93%."""
 EXPONENTS = (0.25, 0.5, 0.75, 1.0)
 """Correction exponents w tried for D_eff(n) = D_inf + a n**-w."""
 MAX_CHI2 = 2.0
@@ -58,14 +41,6 @@ MAX_INF_HALF_WIDTH = 0.05
 """Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
 MIN_OCTAVES = 4
 """Fewest independent octaves of D_eff an extrapolation needs."""
-SHORTCUTS = {"kill_factor": "kill circle", "jumps": "single steps", "step": "Gaussian steps",
-             "walkers": "lockstep walkers"}
-"""The method parameters, each named by the shortcut it takes away from the exact method.
-
-Every other parameter (stickiness, box size, ...) is the model: a scene to
-compare methods in, never a method that fails."""
-EXACT_METHOD = {name: PARAMETERS[name].default for name in SHORTCUTS}
-"""The exact method: every method parameter at its default (``params.PARAMETERS``)."""
 COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
 """Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
@@ -73,63 +48,102 @@ DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 _MERGE_AT = 1_000_000
 """Distinct (diffusion time, depth bin) pairs a configuration collects from its clusters before merging them."""
 
-_ATTRS = {
-    "D": "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window",
-    "D_ci_lo": "lower end of the 95% CI of D (bootstrap over seeds, window fixed)",
-    "D_ci_hi": "upper end of the 95% CI of D (bootstrap over seeds, window fixed)",
-    "D_range_lo": "smallest particle count of the fitted window",
-    "D_range_hi": "largest particle count of the fitted window",
-    "D_drift": "change of the local slope of the ensemble curve across the fitted window",
-    "D_ok": "the ensemble curve has a flat window of a decade (1) or not (0)",
-    "D_reason": "why D_ok is 0; empty otherwise",
-    "D_ci_reason": "why D has no 95% CI (and no other interval over seeds is given); empty otherwise",
-    "D_seeds": "clusters that reached N and enter D",
-    "D_seed_std": "standard deviation over seeds of the per-cluster mass-radius D",
-    "D_box": "box-counting D, mean of the per-cluster fits of every cluster that reached N (reads low)",
-    "D_box_ci_lo": "lower end of the bootstrap 95% CI of D_box",
-    "D_box_ci_hi": "upper end of the bootstrap 95% CI of D_box",
-    "D_box_ok_fraction": "fraction of those clusters whose own box-counting fit is flat",
-    "D_cluster": "mass-radius D of one cluster's own growth history up to N",
-    "D_cluster_ok": "whether that cluster's fit is flat (1) or not (0)",
-    "D_box_cluster": "box-counting D of one cluster at N",
-    "D_box_cluster_ok": "whether that fit is flat (1) or not (0)",
-    "rg_history": "mean radius of gyration over the seeds that reached the largest count, along their growth",
-    "pareto": "on the Pareto front of cost per particle against the bound on |Rg/Rg(exact) - 1| (1) or not (0)",
-    "D_local": "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve",
-    "D_local_ci_lo": "lower end of the bootstrap 95% band of D_local",
-    "D_local_ci_hi": "upper end of the bootstrap 95% band of D_local",
-    "D_inf": "D extrapolated to infinite N: D_eff(n) = D_inf + a n**-w over independent octaves",
-    "D_inf_ci_lo": "lower end of the bootstrap 95% CI of D_inf",
-    "D_inf_ci_hi": "upper end of the bootstrap 95% CI of D_inf",
-    "D_inf_exponent": "correction exponent w of the extrapolation",
-    "D_inf_range_lo": "smallest count of the octaves the extrapolation uses",
-    "D_inf_reason": "why D_inf is not given; empty otherwise",
-    "rg_mean": "mean radius of gyration over the seeds that reached N",
-    "rg_ci_lo": "lower end of the bootstrap 95% CI of rg_mean",
-    "rg_ci_hi": "upper end of the bootstrap 95% CI of rg_mean",
-    "rg_over_rmax": "mean of Rg / R_max over the seeds that reached N",
-    "rg_over_rmax_ci_lo": "lower end of the bootstrap 95% CI of rg_over_rmax",
-    "rg_over_rmax_ci_hi": "upper end of the bootstrap 95% CI of rg_over_rmax",
-    "anisotropy": "mean over the seeds that reached N of the cubic anisotropy of the outer half of the mass",
-    "anisotropy_ci_lo": "lower end of the bootstrap 95% CI of anisotropy",
-    "anisotropy_ci_hi": "upper end of the bootstrap 95% CI of anisotropy",
-    "seconds_per_particle": "mean wall time per particle to grow to N",
-    "steps_per_particle": "mean walk steps per particle to grow to N",
-    "status_count": "clusters with each growth status at N",
-    "cluster_index": "position on the sweep's cluster dimension of this seed's stored cluster, -1 if none",
-    "D_vs_exact": "D minus D of the exact method (other parameters equal) at equal N",
-    "D_vs_exact_half_width": "95% CI half-width of D_vs_exact (both CIs in quadrature)",
-    "rg_mean_vs_exact": "rg_mean over rg_mean of the exact method, minus 1, at equal N",
-    "rg_mean_vs_exact_half_width": "95% CI half-width of rg_mean_vs_exact (both CIs in quadrature)",
-    "rg_over_rmax_vs_exact": "rg_over_rmax minus that of the exact method at equal N",
-    "rg_over_rmax_vs_exact_half_width": "95% CI half-width of rg_over_rmax_vs_exact (both CIs in quadrature)",
-    "D_box_range_lo": "smallest box side of that cluster's box-counting fit window",
-    "D_box_range_hi": "largest box side of that cluster's box-counting fit window",
-    "box_slope": "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, largest N",
-    "box_slope_std": "standard deviation over seeds of box_slope",
-    "diffusion_density": "probability density of diffusion times (walk steps or jumps to stick), pooled over the stored clusters",
-    "diffusion_median": "median diffusion time of the particles that stuck at that depth, pooled over the stored clusters",
+@dataclass(frozen=True)
+class Summarised:
+    """One variable of the summary: its dims beside the configuration's, its type and long name.
+
+    Computed as floats, NaN where missing, and stored as ``dtype``, NaN then
+    becoming ``missing``; ``str`` variables (the reasons) are empty where there
+    is nothing to say.
+    """
+
+    dims: tuple
+    long_name: str
+    dtype: object = np.float64
+    missing: object = np.nan
+
+    def blank(self, shape) -> np.ndarray:
+        """Its values while they are computed: NaN, or empty strings."""
+        return np.full(shape, "", object) if self.dtype is str else np.full(shape, np.nan)
+
+
+_N, _SEEDS = ("n_particles",), ("n_particles", "seed")
+SUMMARY = {
+    "D": Summarised(_N, "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window"),
+    "D_ci_lo": Summarised(_N, "lower end of the 95% CI of D (bootstrap over seeds, window fixed)"),
+    "D_ci_hi": Summarised(_N, "upper end of the 95% CI of D (bootstrap over seeds, window fixed)"),
+    "D_range_lo": Summarised(_N, "smallest particle count of the fitted window"),
+    "D_range_hi": Summarised(_N, "largest particle count of the fitted window"),
+    "D_drift": Summarised(_N, "change of the local slope of the ensemble curve across the fitted window"),
+    "D_ok": Summarised(_N, "the ensemble curve has a flat window of a decade (1) or not (0)", np.int8, 0),
+    "D_seeds": Summarised(_N, "clusters that reached N and enter D", np.int64, 0),
+    "D_seed_std": Summarised(_N, "standard deviation over seeds of the per-cluster mass-radius D"),
+    "D_box": Summarised(_N, "box-counting D, mean of the per-cluster fits of every cluster that reached N (reads low)"),
+    "D_box_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of D_box"),
+    "D_box_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of D_box"),
+    "D_box_ok_fraction": Summarised(_N, "fraction of those clusters whose own box-counting fit is flat"),
+    "rg_mean": Summarised(_N, "mean radius of gyration over the seeds that reached N"),
+    "rg_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_mean"),
+    "rg_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_mean"),
+    "rg_over_rmax": Summarised(_N, "mean of Rg / R_max over the seeds that reached N"),
+    "rg_over_rmax_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_over_rmax"),
+    "rg_over_rmax_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_over_rmax"),
+    "anisotropy": Summarised(_N,
+                             "mean over the seeds that reached N of the cubic anisotropy of the outer half of the "
+                             "mass"),
+    "anisotropy_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of anisotropy"),
+    "anisotropy_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of anisotropy"),
+    "seconds_per_particle": Summarised(_N, "mean wall time per particle to grow to N"),
+    "steps_per_particle": Summarised(_N, "mean walk steps per particle to grow to N"),
+    "pareto": Summarised(_N,
+                         "on the Pareto front of cost per particle against the bound on |Rg/Rg(exact) - 1| (1) or not "
+                         "(0)", np.int8, 0),
+    "D_vs_exact": Summarised(_N, "D minus D of the exact method (other parameters equal) at equal N"),
+    "D_vs_exact_half_width": Summarised(_N, "95% CI half-width of D_vs_exact (both CIs in quadrature)"),
+    "rg_mean_vs_exact": Summarised(_N, "rg_mean over rg_mean of the exact method, minus 1, at equal N"),
+    "rg_mean_vs_exact_half_width": Summarised(_N, "95% CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
+    "rg_over_rmax_vs_exact": Summarised(_N, "rg_over_rmax minus that of the exact method at equal N"),
+    "rg_over_rmax_vs_exact_half_width": Summarised(_N,
+                                                   "95% CI half-width of rg_over_rmax_vs_exact (both CIs in "
+                                                   "quadrature)"),
+    "D_cluster": Summarised(_SEEDS, "mass-radius D of one cluster's own growth history up to N"),
+    "D_cluster_ok": Summarised(_SEEDS, "whether that cluster's fit is flat (1) or not (0)", np.int8, 0),
+    "D_box_cluster": Summarised(_SEEDS, "box-counting D of one cluster at N"),
+    "D_box_cluster_ok": Summarised(_SEEDS, "whether that fit is flat (1) or not (0)", np.int8, 0),
+    "D_box_range_lo": Summarised(_SEEDS, "smallest box side of that cluster's box-counting fit window"),
+    "D_box_range_hi": Summarised(_SEEDS, "largest box side of that cluster's box-counting fit window"),
+    "box_slope": Summarised(("scale_mid",),
+                            "local box-counting slope -d ln N(s) / d ln s between adjacent sides, mean over seeds, "
+                            "largest N"),
+    "box_slope_std": Summarised(("scale_mid",), "standard deviation over seeds of box_slope"),
+    "diffusion_density": Summarised(("diffusion_bin",),
+                                    "probability density of diffusion times (walk steps or jumps to stick), pooled "
+                                    "over the stored clusters"),
+    "diffusion_median": Summarised(("depth_bin",),
+                                   "median diffusion time of the particles that stuck at that depth, pooled over the "
+                                   "stored clusters"),
+    "D_local": Summarised(("n_local",), "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve"),
+    "D_local_ci_lo": Summarised(("n_local",), "lower end of the bootstrap 95% band of D_local"),
+    "D_local_ci_hi": Summarised(("n_local",), "upper end of the bootstrap 95% band of D_local"),
+    "rg_history": Summarised(("n_history",),
+                             "mean radius of gyration over the seeds that reached the largest count, along their "
+                             "growth"),
+    "D_inf": Summarised((), "D extrapolated to infinite N: D_eff(n) = D_inf + a n**-w over independent octaves"),
+    "D_inf_ci_lo": Summarised((), "lower end of the bootstrap 95% CI of D_inf"),
+    "D_inf_ci_hi": Summarised((), "upper end of the bootstrap 95% CI of D_inf"),
+    "D_inf_exponent": Summarised((), "correction exponent w of the extrapolation"),
+    "D_inf_range_lo": Summarised((), "smallest count of the octaves the extrapolation uses"),
+    "status_count": Summarised(("n_particles", "status"), "clusters with each growth status at N", np.int64, 0),
+    "cluster_index": Summarised(("seed",),
+                                "position on the sweep's cluster dimension of this seed's stored cluster, -1 if "
+                                "none", np.int64, -1),
+    "D_reason": Summarised(_N, "why D_ok is 0; empty otherwise", str),
+    "D_ci_reason": Summarised(_N,
+                              "why D has no 95% CI (and no other interval over seeds is given); empty otherwise", str),
+    "D_inf_reason": Summarised((), "why D_inf is not given; empty otherwise", str),
 }
+"""Every variable of ``summarise``'s dataset, in its order: the one place its dims, type and
+long name are spelled (as ``store.SCHEMA`` spells the stored ones)."""
 
 
 def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
@@ -153,11 +167,7 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
         have parents, their branch statistics too (``branching.summary``).
     """
     sweep = _Sweep(ds)
-    out = {name: np.full(sweep.shape + tuple(sweep.extra[d] for d in dims), np.nan)
-           for name, dims in sweep.layout.items()}
-    out["D_reason"] = np.full(sweep.shape + (sweep.n_counts,), "", object)
-    out["D_ci_reason"] = np.full(sweep.shape + (sweep.n_counts,), "", object)
-    out["D_inf_reason"] = np.full(sweep.shape, "", object)
+    out = {name: var.blank(sweep.shape + tuple(sweep.extra[d] for d in var.dims)) for name, var in SUMMARY.items()}
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
     _against_exact(sweep, out)
@@ -239,29 +249,9 @@ class _Sweep:
         self.counts = ds["n_particles"].values.astype(np.int64)
         self.scales = ds["scale"].values
         self.n_counts, self.n_seeds = len(self.counts), ds.sizes["seed"]
-        self.history = _history_counts(int(self.counts[-1]))
+        self.history = history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
-        self.layout = {
-            **{name: ("n_particles",) for name in (
-                "D", "D_ci_lo", "D_ci_hi", "D_range_lo", "D_range_hi", "D_drift", "D_ok", "D_seeds",
-                "D_seed_std", "D_box", "D_box_ci_lo", "D_box_ci_hi", "D_box_ok_fraction", "rg_mean", "rg_ci_lo",
-                "rg_ci_hi", "rg_over_rmax", "rg_over_rmax_ci_lo", "rg_over_rmax_ci_hi", "anisotropy",
-                "anisotropy_ci_lo", "anisotropy_ci_hi", "seconds_per_particle",
-                "steps_per_particle", "pareto", *(f"{n}_vs_exact{e}" for n in COMPARED for e in ("", "_half_width")))},
-            **{name: ("n_particles", "seed") for name in (
-                "D_cluster", "D_cluster_ok", "D_box_cluster", "D_box_cluster_ok", "D_box_range_lo",
-                "D_box_range_hi")},
-            **{name: ("scale_mid",) for name in ("box_slope", "box_slope_std")},
-            "diffusion_density": ("diffusion_bin",),
-            "diffusion_median": ("depth_bin",),
-            **{name: ("n_local",) for name in ("D_local", "D_local_ci_lo", "D_local_ci_hi")},
-            "rg_history": ("n_history",),
-            **{name: () for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_exponent", "D_inf_range_lo")},
-            "status_count": ("n_particles", "status"),
-            "cluster_index": ("seed",),
-        }
-        """Every float summary variable -> its dims beside the configuration's."""
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
         # Files written before the growth history was recorded: the stored clusters give it.
@@ -349,17 +339,12 @@ class _Sweep:
 
     def dataset(self, out, resamples) -> xr.Dataset:
         ds = self.ds
-        base = (*self.config_dims,)
-        dims = {name: base + extra for name, extra in self.layout.items()}
-        dims["D_reason"] = dims["D_ci_reason"] = base + ("n_particles",)
-        dims["D_inf_reason"] = base
         data = {}
         for name, values in out.items():
-            if name in ("D_seeds", "status_count", "cluster_index"):
-                values = np.nan_to_num(values, nan=-1 if name == "cluster_index" else 0).astype(np.int64)
-            elif name.endswith("_ok") or name == "pareto":
-                values = np.nan_to_num(values).astype(np.int8)
-            data[name] = (dims[name], values, {"long_name": _ATTRS[name]})
+            var = SUMMARY[name]
+            if var.dtype not in (str, np.float64):
+                values = np.nan_to_num(values, nan=var.missing).astype(var.dtype)
+            data[name] = ((*self.config_dims, *var.dims), values, {"long_name": var.long_name})
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
         coords["n_history"] = self.history
         coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
@@ -374,26 +359,6 @@ class _Sweep:
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
             "bootstrap_resamples": resamples,
         })
-
-
-def growth_counts(counts) -> np.ndarray:
-    """Counts at which a sweep records each cluster's Rg along its growth (``radius_gyration_history``).
-
-    Everything the analysis reads of a growth history: the local-slope
-    curve (``LOCAL_PER_OCTAVE`` per octave up to the largest count) and
-    ``mass_radius_counts`` of each count, so that a fit on these equals one
-    on every prefix.
-    """
-    counts = np.asarray(counts, np.int64)
-    return np.unique(np.concatenate([_history_counts(int(counts[-1])), *map(mass_radius_counts, counts)]))
-
-
-def _history_counts(n_max):
-    """Counts from ``HISTORY_START`` to ``n_max``, ``LOCAL_PER_OCTAVE`` per octave."""
-    if n_max <= HISTORY_START:
-        return np.array([n_max], np.int64)
-    k = np.arange(int(LOCAL_PER_OCTAVE * np.log2(n_max / HISTORY_START)) + 1)
-    return np.unique(np.r_[np.round(HISTORY_START * 2.0 ** (k / LOCAL_PER_OCTAVE)), n_max].astype(np.int64))
 
 
 def _merge(tables):
@@ -510,7 +475,7 @@ def _headline(curves, counts, rng, resamples):
     if len(curves) < MIN_CI_SEEDS:
         return fit, np.nan, np.nan, too_few(len(curves))
     window = (counts >= fit.range_lo) & (counts <= fit.range_hi)
-    slopes = _slopes(np.log(_resampled_means(curves[:, window], rng, resamples)), np.log(counts[window]))
+    slopes = _slopes(np.log(bootstrap_means(curves[:, window], rng, resamples)), np.log(counts[window]))
     ci_lo, ci_hi = seed_interval(fit.D, slopes, len(curves))
     return fit, ci_lo, ci_hi, ""
 
@@ -550,7 +515,8 @@ def headline(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
             curves[np.isfinite(curves).all(axis=1)], counts, _stream("D", n), resamples)
         out["D"][config] = fit.D
     coords = {d: ds[d].values for d in sweep.config_dims}
-    return xr.Dataset({name: (sweep.config_dims, values, {"long_name": _ATTRS[name]}) for name, values in out.items()},
+    return xr.Dataset({name: (sweep.config_dims, values, {"long_name": SUMMARY[name].long_name})
+                       for name, values in out.items()},
                       coords=coords)
 
 
@@ -563,7 +529,7 @@ def _local(sweep, config, curves, out, resamples):
     """Local slopes of the ensemble curve with their band, and the extrapolation D_inf."""
     o = {name: values[(*config, ...)] for name, values in out.items()}
     if len(curves) == 0 or len(sweep.octaves) == 0:
-        o["D_inf_reason"][()] = (f"the largest count spans no octave above {HISTORY_START}" if len(curves)
+        o["D_inf_reason"][()] = (f"the largest count spans no octave above {MIN_COUNT}" if len(curves)
                                  else "no cluster reached the largest count")
         return
     o["rg_history"][:] = curves.mean(axis=0)
@@ -574,7 +540,7 @@ def _local(sweep, config, curves, out, resamples):
     if len(curves) < MIN_CI_SEEDS:
         o["D_inf_reason"][()] = too_few(len(curves))
         return
-    boot = np.log(_resampled_means(curves, _stream("D_local", sweep.counts[-1]), resamples))
+    boot = np.log(bootstrap_means(curves, _stream("D_local", sweep.counts[-1]), resamples))
     band = np.array([_slopes(boot[:, w], log_n[w]) for w in sweep.octaves])
     o["D_local_ci_lo"][:], o["D_local_ci_hi"][:] = seed_interval(local, band, len(curves), axis=1)
     _extrapolate(sweep, o, local, band, len(curves))
@@ -583,7 +549,7 @@ def _local(sweep, config, curves, out, resamples):
 def _extrapolate(sweep, o, local, band, n_seeds):
     """D_inf from D_eff(n) = D_inf + a n**-w over independent (non-overlapping) octaves (``band``: the
     bootstrap of D_eff over ``n_seeds`` clusters)."""
-    step = LOCAL_PER_OCTAVE
+    step = PER_OCTAVE
     pick = np.arange(len(local) - 1, -1, -step)[::-1]  # back from the largest octave
     centres = np.array([np.exp(np.log(sweep.history[sweep.octaves[i]]).mean()) for i in pick])
     y, boot = local[pick], band[pick]
@@ -618,12 +584,6 @@ def _extrapolate(sweep, o, local, band, n_seeds):
     o["D_inf_exponent"][()], o["D_inf_range_lo"][()] = w, centres[start]
 
 
-def _resampled_means(curves, rng, resamples):
-    """Means over seeds of ``resamples`` bootstrap draws of the rows of ``curves``."""
-    draws = rng.integers(0, len(curves), (resamples, len(curves)))
-    return np.stack([curves[d].mean(axis=0) for d in draws])
-
-
 def _slopes(log_rg, log_n):
     """Least-squares slope of log_n on each row of log_rg."""
     x = log_rg - log_rg.mean(axis=-1, keepdims=True)
@@ -633,237 +593,3 @@ def _slopes(log_rg, log_n):
 def _key(value):
     """A hashable, type-stable form of a coordinate value (bools and numpy scalars)."""
     return value.item() if hasattr(value, "item") else value
-
-
-# What the report reads ------------------------------------------------------
-# Everything the report draws or writes that is computed from a sweep and its
-# summary, beyond ``summarise``: the table's rows, names of configurations,
-# the exact reference of each, fitted lines, plot ranges and biases. The
-# report (``dlasweep.report``) only draws and writes these.
-
-REFERENCE_D = {2: 1.7100, 3: 2.50}
-"""D of DLA: 2D off-lattice 1.7100(3) (Menshutin et al. 2008); 3D about 2.50."""
-
-
-class Readout:
-    """A sweep, its summary (``summarise``), and what the report reads of them, by configuration.
-
-    Attributes
-    ----------
-    ds : xarray.Dataset
-        The sweep.
-    s : xarray.Dataset
-        ``summarise(ds)``.
-    config_dims : list of str
-        ``config_dims(ds)``; ``configs`` are index tuples on them, in C order.
-    counts : ndarray
-        The particle counts.
-    dim, lattice
-        The sweep's largest dimension, and whether every cluster is on a lattice.
-    reference : float or None
-        The published D the plots draw (``REFERENCE_D``); None for lattice
-        sweeps, which cross over to axis-aligned growth.
-    methods : list of str
-        ``method_axes(ds)``.
-    """
-
-    def __init__(self, ds, summary=None):
-        self.ds = ds = with_selected_clusters(ds)
-        self.s = summarise(ds) if summary is None else summary
-        self.config_dims = config_dims(ds)
-        self.params = [d for d in self.config_dims if d != "size"]
-        self.counts = ds["n_particles"].values
-        self.status_names = list(self.s["status"].values)
-        self.dim = int(ds["dim"].max()) if "dim" in ds else 2
-        self.lattice = bool((ds["model"] == "lattice").all()) if "model" in ds else True
-        self.configs = list(np.ndindex(*(ds.sizes[d] for d in self.config_dims)))
-        # Lattice clusters cross over to axis-aligned growth: the off-lattice value is not theirs.
-        self.reference = None if self.lattice else REFERENCE_D.get(self.dim)
-        self.methods = method_axes(ds)
-        self.n_clusters = len(self.configs) * ds.sizes["seed"]
-        """Clusters grown: one per configuration and seed."""
-        self.n_stored = ds.sizes.get("cluster", 0)
-        """Clusters whose positions the dataset keeps."""
-        self._rows = {}
-
-    def at(self, name, config, **index):
-        """Values of summary variable ``name`` at a configuration (and e.g. ``n_particles=k``)."""
-        return self.s[name][{**dict(zip(self.config_dims, config)), **index}].values
-
-    def bars(self, name, config):
-        """Summary variable ``name`` at a configuration, every count, and its 95% CI as ``error_bars``."""
-        mean = self.at(name, config)
-        return mean, error_bars(mean, self.at(f"{name}_ci_lo", config), self.at(f"{name}_ci_hi", config))
-
-    def value(self, name, config):
-        """The value of swept parameter (or ``size``) ``name`` at a configuration, as a plain Python value."""
-        return plain(self.ds[name].values[config[self.config_dims.index(name)]])
-
-    def param(self, name, config):
-        """A model parameter at a configuration: swept, fixed (a scalar coordinate), or else its default."""
-        if name in self.config_dims:
-            return self.value(name, config)
-        return plain(self.ds[name].values) if name in self.ds.coords else PARAMETERS[name].default
-
-    def row(self, config, k) -> dict:
-        """One line of the summary table at count index ``k`` (built once).
-
-        The configuration's values, ``n_particles``, ``seeds``, ``status``
-        (``name:count`` of the statuses present), ``flagged`` (some cluster
-        stopped early), every summary variable on ``n_particles`` and, at the
-        largest count, D_inf.
-        """
-        if (config, k) not in self._rows:
-            self._rows[config, k] = self._row(config, k)
-        return self._rows[config, k]
-
-    def _row(self, config, k) -> dict:
-        row = {name: plain(self.ds[name].values[i]) for name, i in zip(self.config_dims, config)}
-        tally = self.at("status_count", config, n_particles=k)
-        row.update(n_particles=int(self.counts[k]), seeds=int(tally.sum()),
-                   status=" ".join(f"{n}:{t}" for n, t in zip(self.status_names, tally) if t),
-                   flagged=bool(tally[1:].any()))
-        for name in (*(n for n, v in self.s.data_vars.items() if v.dims[-1:] == ("n_particles",)), "D_reason"):
-            row[name] = plain(self.at(name, config, n_particles=k))
-        for name in ("D_inf", "D_inf_ci_lo", "D_inf_ci_hi", "D_inf_reason"):
-            row[name] = plain(self.at(name, config)) if k == len(self.counts) - 1 else ""
-        return row
-
-    def rows(self):
-        """Every row: configurations in C order, each at every count."""
-        return [self.row(c, k) for c in self.configs for k in range(len(self.counts))]
-
-    def label(self, config, dims=None) -> str:
-        """``name=value`` for the swept parameters and the box size of a configuration."""
-        parts = []
-        for name, i in zip(self.config_dims, config):
-            if dims is not None and name not in dims:
-                continue
-            value = self.ds[name].values[i]
-            if name == "size":
-                if self.ds.sizes["size"] > 1 or value:
-                    parts.append("unbounded" if value == 0 else f"L={value}")
-            else:
-                parts.append(f"{name}={plain(value)}")
-        return ", ".join(parts) or "all clusters"
-
-    def cluster_of(self, config, seed):
-        """Position on ``cluster`` of a configuration's cluster, or None when it is not stored."""
-        index = int(self.at("cluster_index", config, seed=seed))
-        return None if index < 0 else index
-
-    def status_of(self, config, k, seed) -> str:
-        """The growth status of one cluster at count index ``k``."""
-        where = {**dict(zip(self.config_dims, config)), "n_particles": k, "seed": seed}
-        return self.status_names[int(self.ds["status"][where])]
-
-    def exact(self, config):
-        """The configuration with every method axis at its exact value (``exact_reference``), or None."""
-        return exact_reference(self.ds, config)
-
-    def shortcuts(self, config) -> list:
-        """The method axes on which a configuration departs from the exact method."""
-        return [m for m in self.methods if self.value(m, config) != EXACT_METHOD[m]]
-
-    def family(self, config) -> str:
-        """The shortcuts a configuration takes, e.g. ``kill circle + single steps``; ``exact`` for none."""
-        return " + ".join(SHORTCUTS[m] for m in self.shortcuts(config)) or "exact"
-
-    def variant(self, config) -> str:
-        """The non-exact method values of a configuration, e.g. ``kill_factor=1.2, step=2.0``."""
-        shown = self.shortcuts(config)
-        return self.label(config, shown) if shown else "exact"
-
-    def pareto_front(self, configs, k) -> list:
-        """The rows of ``configs`` at count index ``k`` on the Pareto front (``pareto``), cheapest first."""
-        front = [row for row in (self.row(c, k) for c in configs) if row["pareto"]]
-        return sorted(front, key=lambda r: r["seconds_per_particle"])
-
-    def scenes(self) -> list:
-        """One configuration per scene (values of the swept parameters that are not methods, and ``size``).
-
-        Each at the exact method where the sweep has it, else the scene's first configuration.
-        """
-        seen = {}
-        for config in self.configs:
-            scene = tuple(i for d, i in zip(self.config_dims, config) if d not in self.methods)
-            seen.setdefault(scene, self.exact(config) or config)
-        return list(seen.values())
-
-    def scene_label(self, config) -> str:
-        """``name=value`` of the scene parameters that take several values; empty for a sweep of one scene."""
-        shown = [d for d in self.config_dims if d not in self.methods and self.ds.sizes[d] > 1]
-        return self.label(config, shown) if shown else ""
-
-    def differences(self, k) -> list:
-        """D between scenes one value apart on one swept parameter (not a method), at count index ``k``.
-
-        Returns ``(config, other, D(other) - D(config), half-width)`` for
-        every configuration and its neighbour along each such axis; the
-        half-width is that of the difference's 95% CI (both CIs in
-        quadrature, NaN without them).
-        """
-        pairs = []
-        for axis in (d for d in self.config_dims if d not in self.methods and self.ds.sizes[d] > 1):
-            a = self.config_dims.index(axis)
-            for config in self.configs:
-                if config[a] + 1 < self.ds.sizes[axis]:
-                    other = (*config[:a], config[a] + 1, *config[a + 1:])
-                    one, two = self.row(config, k), self.row(other, k)
-                    pairs.append((config, other, two["D"] - one["D"],
-                                  np.hypot(ci_half_width(one, "D"), ci_half_width(two, "D"))))
-        return pairs
-
-    def one_factor(self, axis, base):
-        """The configurations that differ from ``base`` only along ``axis``: (at the exact value, the others)."""
-        a = self.config_dims.index(axis)
-        line = [c for c in self.configs if all(c[i] == base[i] for i in range(len(c)) if i != a)]
-        exact = [c for c in line if self.value(axis, c) == EXACT_METHOD.get(axis)]
-        return exact, [c for c in line if c not in exact]
-
-
-def plain(value):
-    """A numpy scalar (or bytes) as a plain Python value (str)."""
-    value = value.item() if hasattr(value, "item") else value
-    return value.decode() if isinstance(value, bytes) else value
-
-
-def error_bars(mean, lo, hi):
-    """The lengths below and above ``mean`` of its interval ``[lo, hi]``, 0 where there is none (a ``yerr``)."""
-    return [np.nan_to_num(mean - lo), np.nan_to_num(hi - mean)]
-
-
-def fitted_line(x, y, slope):
-    """The line of ``slope`` in log-log through the points ``(x, y)`` (least squares, slope fixed), at ``x``."""
-    anchor = np.exp(np.mean(np.log(y) - slope * np.log(x)))
-    return anchor * x ** slope
-
-
-def visible_scales(scales, box_count):
-    """Box sides worth drawing: up to twice the first side at which every count is 1 (beyond, nothing changes)."""
-    full = box_count.max(axis=tuple(range(box_count.ndim - 1))) <= 1
-    return scales <= 2 * scales[min(np.argmax(full), len(scales) - 1)]
-
-
-def fitted_scales(summary):
-    """The midpoints of box sides within the largest box-counting fit window at the largest count."""
-    mid = summary["scale_mid"].values
-    fitted = summary["D_box_range_hi"].isel(n_particles=-1).values
-    # Beyond the fitted windows the counts saturate and the slope is noise.
-    top = np.nanmax(fitted) if np.isfinite(fitted).any() else mid[-1]
-    return (mid >= 1.5) & (mid <= top)
-
-
-def ci_half_width(row, name) -> float:
-    """Half the width of the 95% CI of ``name`` in a row."""
-    return (row[f"{name}_ci_hi"] - row[f"{name}_ci_lo"]) / 2
-
-
-def bias(row, ref, name) -> float:
-    """``name`` of a row minus that of the reference row, in units of their combined 95% CI half-widths."""
-    return (row[name] - ref[name]) / np.hypot(ci_half_width(ref, name), ci_half_width(row, name))
-
-
-def resolved(value, half) -> bool:
-    """Whether a difference is resolved: its 95% CI excludes zero."""
-    return abs(value) > half

@@ -17,6 +17,26 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from . import store
+
+MIB = "2^20 byte"
+"""The units of memory sizes (MiB, which udunits does not know)."""
+
+BENCH_SCHEMA = {
+    "seconds": store.Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
+    "n_grown": store.Variable(("run",), np.int64, "1", "particles attached"),
+    "walk_steps": store.Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
+    # MiB, in words udunits reads
+    "peak_memory": store.Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
+    "added_memory": store.Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
+    "n": store.Variable(("run",), np.int64, "1", "target particle count"),
+    "model": store.Variable(("run",), str, None, "model and dimension"),
+    "method": store.Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
+}
+"""The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
+its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
+
+
 MODELS = {
     "lattice-2d": {"model": "lattice", "dim": 2},
     "offlattice-2d": {"model": "offlattice", "dim": 2},
@@ -208,17 +228,16 @@ def exponent_attribute(model: str) -> str:
 
 
 def _to_dataset(rows) -> xr.Dataset:
-    """The measurements as a Dataset on ``run``, laid out and described by ``store.BENCH_SCHEMA``."""
-    from .store import BENCH_SCHEMA, describe, provenance
-
+    """The measurements as a Dataset on ``run``, laid out and described by ``BENCH_SCHEMA``."""
     keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
     columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype))
                for name, var in BENCH_SCHEMA.items()}
     coords = ("model", "method", "n")
     ds = xr.Dataset({name: column for name, column in columns.items() if name not in coords},
                     coords={name: columns[name] for name in coords},
-                    attrs={"title": "dlasweep kernel benchmark", "history": provenance("dlasweep.bench.run_bench")})
-    return describe(ds, BENCH_SCHEMA)
+                    attrs={"title": "dlasweep kernel benchmark",
+                           "history": store.provenance("dlasweep.bench.run_bench")})
+    return store.describe(ds, BENCH_SCHEMA)
 
 
 REPORT_SPEC = """\
@@ -339,7 +358,8 @@ def analysis_bench(echo=print) -> dict:
     import time
 
     from .fit import fit_dimension, fit_mass_radius
-    from .measure import box_counts, radius_of_gyration
+    from .boxes import box_counts
+    from .measure import radius_of_gyration
     from .report import report
     from .store import open_sweep
 

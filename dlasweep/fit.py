@@ -22,16 +22,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 from math import lgamma, log, pi
+from statistics import NormalDist
 
 import numpy as np
 
-Z95 = 1.959963984540054
-"""Two-sided 95% quantile of the standard normal: every interval here is a 95% CI."""
+from .config import CONFIDENCE, MIN_COUNT, MIN_DECADES, PER_OCTAVE, RESAMPLES, START_FRACTION
+
+Z95 = NormalDist().inv_cdf((1 + CONFIDENCE) / 2)
+"""Two-sided ``CONFIDENCE`` quantile of the standard normal (1.96): every interval here is a 95% CI."""
 
 
 @lru_cache(maxsize=None)
 def t95(dof: int) -> float:
-    """Two-sided 95% quantile of Student's t with ``dof`` degrees of freedom (``Z95`` as ``dof`` grows).
+    """Two-sided ``CONFIDENCE`` quantile of Student's t with ``dof`` degrees of freedom (``Z95`` as ``dof`` grows).
 
     Bisection on the distribution function, the density integrated by
     Simpson's rule (to 1e-9; the package needs no scipy).
@@ -48,7 +51,7 @@ def t95(dof: int) -> float:
     lo, hi = Z95, 13.0  # t95(1) = 12.706
     while hi - lo > 1e-10:
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if mass(mid) < 0.475 else (lo, mid)
+        lo, hi = (mid, hi) if mass(mid) < CONFIDENCE / 2 else (lo, mid)
     return (lo + hi) / 2
 
 
@@ -64,11 +67,15 @@ def seed_interval(estimate, replicates, n: int, axis=-1):
     half = t95(n - 1) * np.std(replicates, axis=axis, ddof=1) * np.sqrt(n / (n - 1))
     return estimate - half, estimate + half
 
+
+def bootstrap_means(curves, rng, resamples=RESAMPLES):
+    """Means over seeds of ``resamples`` bootstrap draws of the rows of ``curves`` (a row per seed):
+    the replicates ``seed_interval`` reads."""
+    draws = rng.integers(0, len(curves), (resamples, len(curves)))
+    return np.stack([curves[d].mean(axis=0) for d in draws])
+
+
 _OCTAVE = np.log(2.0)
-START_FRACTION = 0.05
-"""Default end of the transient of a growth history, as a fraction of its largest count (``mass_radius_counts``)."""
-MIN_DECADES = 1.0
-"""Default narrowest window a fit of D accepts, in decades of its variable (both fits)."""
 
 
 @dataclass(frozen=True)
@@ -305,8 +312,8 @@ def _families(scales):
     return whole // (whole & -whole)
 
 
-def mass_radius_counts(n_max: int, *, start_fraction: float = START_FRACTION, min_count: int = 50,
-                       per_octave: int = 8) -> np.ndarray:
+def mass_radius_counts(n_max: int, *, start_fraction: float = START_FRACTION, min_count: int = MIN_COUNT,
+                       per_octave: int = PER_OCTAVE) -> np.ndarray:
     """Particle counts at which a growth history is sampled for ``fit_mass_radius``.
 
     Geometrically spaced, ``per_octave`` per factor two, from the end of the
@@ -326,13 +333,33 @@ def mass_radius_counts(n_max: int, *, start_fraction: float = START_FRACTION, mi
     return np.unique(np.r_[np.round(targets[targets < n_max]), n_max].astype(np.int64))
 
 
+def growth_counts(counts) -> np.ndarray:
+    """Counts at which a sweep records each cluster's Rg along its growth (``radius_gyration_history``).
+
+    Everything the analysis reads of a growth history: the local-slope
+    curve (``PER_OCTAVE`` per octave up to the largest count) and
+    ``mass_radius_counts`` of each count, so that a fit on these equals one
+    on every prefix.
+    """
+    counts = np.asarray(counts, np.int64)
+    return np.unique(np.concatenate([history_counts(int(counts[-1])), *map(mass_radius_counts, counts)]))
+
+
+def history_counts(n_max) -> np.ndarray:
+    """Counts from ``MIN_COUNT`` to ``n_max``, ``PER_OCTAVE`` per octave: the local-slope curve."""
+    if n_max <= MIN_COUNT:
+        return np.array([n_max], np.int64)
+    k = np.arange(int(PER_OCTAVE * np.log2(n_max / MIN_COUNT)) + 1)
+    return np.unique(np.r_[np.round(MIN_COUNT * 2.0 ** (k / PER_OCTAVE)), n_max].astype(np.int64))
+
+
 def fit_mass_radius(
     rg,
     n=None,
     *,
     start_fraction: float = START_FRACTION,
-    min_count: int = 50,
-    per_octave: int = 8,
+    min_count: int = MIN_COUNT,
+    per_octave: int = PER_OCTAVE,
     min_decades: float = MIN_DECADES,
     min_points: int = 6,
     flat_tolerance: float = 0.02,

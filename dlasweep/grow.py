@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import os
 import threading
 import time
 from dataclasses import dataclass, field
@@ -11,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import params as _params
+from ._jit import cached
 from .kernels import lattice, offlattice
 
 KERNELS = {"lattice": lattice.grow_lattice, "offlattice": offlattice.grow_offlattice}
@@ -93,8 +93,8 @@ def compiled(model: str) -> bool:
 
     Only this process's cache is looked at: the embedded cluster's too.
     """
-    kernel = {"lattice": lattice.grow._grow_each, "offlattice": offlattice.grow._grow_each}[model]
-    return os.path.exists(kernel._cache._cache_file._index_path)
+    # The kernels name no entry kernel of their own yet: the one that takes most of the compile time.
+    return cached({"lattice": lattice.grow._grow_each, "offlattice": offlattice.grow._grow_each}[model])
 
 
 def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:
@@ -161,7 +161,7 @@ def _checked(n, checkpoints, params):
 
 def _cluster(result, p, marks):
     points, steps, parents, code, times, seconds = result
-    return Cluster(points, steps, _params.STATUSES[code], dict(p), marks, times, seconds, parents)
+    return Cluster(points, steps, _params.Status(code).name, dict(p), marks, times, seconds, parents)
 
 
 def _watched(kernel, n, p, marks, rng, progress=None):

@@ -8,6 +8,7 @@ raises ``ValueError`` naming the offending parameter.
 from __future__ import annotations
 
 import contextlib
+import enum
 import functools
 import math
 import numbers
@@ -19,7 +20,10 @@ MODELS = ("lattice", "offlattice")
 SEED_SHAPES = ("point", "block", "line")
 LAUNCHES = ("circle", "box")
 STATUSES = ("ok", "boundary", "step_limit", "exhausted", "error")
-"""Growth outcomes; the index is the integer code kernels return."""
+"""Growth outcomes; the index is the integer code kernels return and the dataset's ``status`` holds
+(``error``: a sweep's task that failed)."""
+Status = enum.IntEnum("Status", [(name, code) for code, name in enumerate(STATUSES)])
+"""``STATUSES`` as named codes: ``Status.ok`` is 0, ``Status[cluster.status]`` a cluster's code."""
 
 
 def is_integer(value) -> bool:
@@ -64,6 +68,11 @@ class Parameter:
         replaced), before the checks.
     note : str
         More for the README's table, beyond ``meaning``.
+    shortcut : str
+        For a method parameter, the shortcut a value other than the
+        default takes away from the exact method (``SHORTCUTS``); empty for
+        the model (stickiness, box size, ...): a scene to compare methods
+        in, never a method that fails.
     """
 
     kind: type
@@ -75,6 +84,7 @@ class Parameter:
     shown: str | None = None
     fill: Callable | None = None
     note: str = ""
+    shortcut: str = ""
 
 
 MIN_SIZE = 8
@@ -160,6 +170,7 @@ PARAMETERS = {
     "kill_factor": Parameter(
         float, 0.0, f"0 or in (1, {MAX_RADIUS_FACTOR:g}]",
         "kill radius over the launch radius; 0 = exact return to the launch circle, none killed",
+        shortcut="kill circle",
         note="the exact return draws from the Poisson kernel (2D) or escapes with probability 1-R/r (3D); > 1: "
              "killed and relaunched beyond kill_factor * launch radius",
         checks=(lambda kf, p, given: f"{kf} must be 0 (exact return) or > 1" if kf != 0.0 and kf <= 1.0 else None,
@@ -167,10 +178,11 @@ PARAMETERS = {
                 lambda kf, p, given: "a kill circle needs launch='circle' (box launches start outside it)"
                 if kf != 0.0 and p["launch"] == "box" else None)),
     "jumps": Parameter(bool, True, "true or false", "exact first-passage jumps far from the cluster (true), or "
-                                                    "single steps everywhere (false)"),
+                                                    "single steps everywhere (false)",
+                       shortcut="single steps"),
     "step": Parameter(float, 0.0, f"0 or in (0, {MAX_STEP:g}]",
                       "off-lattice step: 0 = move to exact contact, > 0 = standard deviation of fixed Gaussian steps "
-                      "with overlap checks (can tunnel)",
+                      "with overlap checks (can tunnel)", shortcut="Gaussian steps",
                       checks=(_negative, _above(MAX_STEP, f"{MAX_STEP:g}",
                                                 " diameters (a step far longer than the cluster jumps over it)"),
                               lambda st, p, given: "a step length applies only to model='offlattice'"
@@ -178,7 +190,7 @@ PARAMETERS = {
     "walkers": Parameter(int, 1, f"an integer in [1, {MAX_WALKERS}]",
                          "walkers at once; more than 1 start uniformly in the box and move in lockstep, none "
                          "relaunched",
-                         note="lockstep walkers take single steps",
+                         note="lockstep walkers take single steps", shortcut="lockstep walkers",
                          checks=(_below(1, "1"), _above(MAX_WALKERS, MAX_WALKERS),
                                  lambda w, p, given: "more than one walker needs size > 0 (they start uniformly in the "
                                  "box)" if w > 1 and p["size"] == 0 else None)),
@@ -194,6 +206,10 @@ command line's options and help (``cli``), the spec's checks (``spec``, through
 
 DEFAULTS = {name: p.default for name, p in PARAMETERS.items()}
 """Model parameters and their defaults, as ``resolve`` fills them in."""
+SHORTCUTS = {name: p.shortcut for name, p in PARAMETERS.items() if p.shortcut}
+"""The method parameters, each named by the shortcut it takes away from the exact method."""
+EXACT_METHOD = {name: DEFAULTS[name] for name in SHORTCUTS}
+"""The exact method: every method parameter at its default."""
 
 
 def _kind(name, value, kind):

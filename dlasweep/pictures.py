@@ -247,7 +247,7 @@ def _square(frame, lattice, span=None):
     return np.stack([low, low + span], axis=1)
 
 
-def describe(params, n, seed=None, status="ok"):
+def describe(params, n, seed=None, status=_params.Status.ok.name):
     """A cluster in words: model, N, seed, status, and every parameter that differs from its default.
 
     Returns
@@ -260,14 +260,15 @@ def describe(params, n, seed=None, status="ok"):
     p = _params.resolve(**params)
     usual = _params.resolve(model=p["model"], dim=p["dim"])  # the defaults, neighbours made explicit for dim
     head = f"{p['model']} DLA in {p['dim']}D, N = {n}" + ("" if seed is None else f", seed {seed}")
-    if status != "ok":
+    if status != _params.Status.ok.name:
         head += f", stopped: {status}"
     changed = [f"{name}={_params.text(p[name])}"
                for name in _params.PARAMETERS if p[name] != usual[name]]
     return head, changed
 
 
-def cluster_figure(points, params, *, seed=None, status="ok", inches=DEFAULT_INCHES, dpi=None, rasterized=True):
+def cluster_figure(points, params, *, seed=None, status=_params.Status.ok.name, inches=DEFAULT_INCHES, dpi=None,
+                   rasterized=True):
     """One cluster's picture: a square figure with its title.
 
     Parameters
@@ -352,7 +353,8 @@ def _inches(pixels, dpi):
     return inches if inches * dpi >= pixels else np.nextafter(inches, np.inf)
 
 
-def draw_cluster(points, params, path, *, seed=None, status="ok", inches=DEFAULT_INCHES, dpi=None) -> Path:
+def draw_cluster(points, params, path, *, seed=None, status=_params.Status.ok.name, inches=DEFAULT_INCHES,
+                 dpi=None) -> Path:
     """Draw one cluster to a PNG or SVG file (``cluster_figure`` says what it shows).
 
     Parameters

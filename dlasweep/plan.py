@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from . import store
-from .analysis import growth_counts
+from .fit import growth_counts
 from .spec import Spec, SpecError
-from .sweep import sweep_scales
+from .task import sweep_scales
 
 KERNEL_BYTES = {("lattice", 2): 34, ("offlattice", 2): 49, ("lattice", 3): 123, ("offlattice", 3): 70}
 """Memory a growing cluster takes per particle, by model and dim: the memory ``dlasweep bench --full``

@@ -2,7 +2,7 @@
 
 Draws and writes what ``analysis.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
-Rg, costs), read through ``analysis.Readout`` (rows, labels, the exact
+Rg, costs), read through ``readout.Readout`` (rows, labels, the exact
 reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
 ``summary.md``, PNG plots and ``report.md`` into one folder, which holds
 one report: an earlier report there is removed first (``files`` names
@@ -18,22 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import (
-    EXACT_METHOD,
-    MIN_CI_SEEDS,
-    Readout,
-    bias,
-    error_bars,
-    fitted_line,
-    fitted_scales,
-    plain,
-    resolved,
-    visible_scales,
-)
-from .bench import exponent_attribute
-from .fit import MIN_DECADES, START_FRACTION
-from .params import text
+from .config import MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
+from .params import EXACT_METHOD, text
 from .pictures import draw_points
+from .readout import REFERENCE_D, Readout, bias, error_bars, fitted_line, fitted_scales, resolved, visible_scales
 from .report_branching import branching_figure, branching_lines
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
@@ -209,7 +197,7 @@ def _write_table(sweep, path) -> Path:
 
 # Plots --------------------------------------------------------------------
 
-def _figure(n_panels=1, width=4.0, height=3.4, sharey=False):
+def new_figure(n_panels=1, width=4.0, height=3.4, sharey=False):
     """A grid of panels on a Figure of its own (no pyplot state, no backend switch); ``sharey``: one y-axis."""
     from matplotlib.figure import Figure  # here, so `import dlasweep` (and dask workers) skip matplotlib
 
@@ -223,11 +211,13 @@ def _figure(n_panels=1, width=4.0, height=3.4, sharey=False):
     return fig, axes[:n_panels]
 
 
-def _save(fig, path):
+def save_figure(fig, path):
+    """Write a figure of the report (or the benchmark's) as a PNG."""
     fig.savefig(path, dpi=110)
 
 
-def _colour(i):
+def colour_of(i):
+    """The i-th colour of the report's plots (tab10, cycling)."""
     from matplotlib import colormaps
 
     return colormaps["tab10"](i % 10)
@@ -253,7 +243,7 @@ def _gallery(sweep, path):
     shown = [c for c in sweep.configs if sweep.cluster_of(c, 0) is not None][:_MAX_PANELS]
     if not shown:
         return None
-    fig, axes = _figure(len(shown), 3.4, 3.4)
+    fig, axes = new_figure(len(shown), 3.4, 3.4)
     last = len(sweep.counts) - 1
     for ax, config in zip(axes, shown):
         points = _cluster_points(sweep.ds, sweep.cluster_of(config, 0))
@@ -266,7 +256,7 @@ def _gallery(sweep, path):
     # Two short lines: a one-panel gallery is only 3.4 inches wide.
     fig.suptitle("Seed 0 of each configuration\ncolour: attachment order (dark: early)"
                  + ("\nx-y view, paler: deeper" if sweep.dim == 3 else ""), fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     extra = f" (first {_MAX_PANELS} of {len(sweep.configs)} configurations)" if len(sweep.configs) > _MAX_PANELS else ""
     return f"One cluster per configuration at its largest count{extra}, coloured by attachment order."
 
@@ -275,7 +265,7 @@ def _box_counts(sweep, path):
     scales = sweep.ds["scale"].values
     last = len(sweep.counts) - 1
     shown = sweep.configs[:_MAX_PANELS]
-    fig, axes = _figure(len(shown))
+    fig, axes = new_figure(len(shown))
     # Past the largest cluster every count is 1: nothing to see there.
     visible = visible_scales(scales, sweep.ds["box_count"].values)
     for ax, config in zip(axes, shown):
@@ -299,7 +289,7 @@ def _box_counts(sweep, path):
         ax.set_ylabel("boxes N(s)")
         ax.legend(fontsize=7)
     fig.suptitle(f"Box counts at N={sweep.counts[last]}\n(grey: all seeds; shaded: seed 0's fitted range)", fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     return ("Box counts N(s) at the largest count, every seed in grey, seed 0 with the fitted line over the "
             "range the fit chose (shaded; orange when its local slope is not flat). A finite-cluster estimate: "
             "it reads low.")
@@ -311,11 +301,11 @@ def _box_local_slopes(sweep, path):
         return None
     mid = sweep.s["scale_mid"].values
     keep = fitted_scales(sweep.s)
-    fig, (ax,) = _figure(1, 6.5, 4.2)
+    fig, (ax,) = new_figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
         mean, spread = sweep.at("box_slope", config)[keep], sweep.at("box_slope_std", config)[keep]
-        ax.plot(mid[keep], mean, color=_colour(c), label=sweep.label(config))
-        ax.fill_between(mid[keep], mean - spread, mean + spread, color=_colour(c), alpha=0.12, lw=0)
+        ax.plot(mid[keep], mean, color=colour_of(c), label=sweep.label(config))
+        ax.fill_between(mid[keep], mean - spread, mean + spread, color=colour_of(c), alpha=0.12, lw=0)
     _log_x(ax)
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"off-lattice reference {sweep.reference}")
@@ -323,7 +313,7 @@ def _box_local_slopes(sweep, path):
     ax.set_ylabel("box-counting slope -d ln N / d ln s\n(mean ± std over seeds)")
     ax.set_title(f"Box-counting local slope at N={sweep.counts[-1]}", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
-    _save(fig, path)
+    save_figure(fig, path)
     extra = f" (first 10 of {len(sweep.configs)} configurations)" if len(sweep.configs) > 10 else ""
     return ("Box counting's local slope -d ln N / d ln s between adjacent box sides, mean ± std over seeds, up to "
             "the largest fitted window" + extra + ": where it is not flat, box counting's D depends on the window "
@@ -339,7 +329,7 @@ def _dimension_vs_n(sweep, path):
     band = bool(np.isfinite(sweep.s["D_local_ci_lo"].values).any())
     inf = [c for c in shown if np.isfinite(sweep.at("D_inf", c))]
     # One y-axis: panels compare by eye.
-    fig, axes = _figure(len(shown), 4.2, 3.4, sharey=True)
+    fig, axes = new_figure(len(shown), 4.2, 3.4, sharey=True)
     n_local = sweep.s["n_local"].values
     for ax, config in zip(axes, shown):
         if len(n_local):
@@ -366,7 +356,7 @@ def _dimension_vs_n(sweep, path):
     fig.legend(*_legend(axes), loc="outside lower center", fontsize=6, ncols=3)
     fig.suptitle("D against cluster size (" + ("bars: 95% CI; " if bars else f"no CI: fewer than {MIN_CI_SEEDS} "
                  "clusters; ") + "numbers: clusters in the ensemble)", fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     said = ["the headline ensemble mass-radius D at each N (filled) with the number of clusters in it",
             "the mean box-counting D (open squares, reads low)",
             "the local slope D_eff(n)" + (" with its 95% band" if band else "")]
@@ -393,7 +383,7 @@ def _mass_radius(sweep, path):
     shown = [c for c in sweep.configs[:_MAX_PANELS] if np.isfinite(sweep.at("rg_history", c)).any()]
     if not shown:
         return None
-    fig, axes = _figure(len(shown), 4.2, 3.4)
+    fig, axes = new_figure(len(shown), 4.2, 3.4)
     last = len(sweep.counts) - 1
     for ax, config in zip(axes, shown):
         rg = sweep.at("rg_history", config)
@@ -410,7 +400,7 @@ def _mass_radius(sweep, path):
         ax.set_ylabel("particles n")
         ax.legend(fontsize=6, loc="upper left")
     fig.suptitle(f"Mass against radius, the headline estimator, at N={sweep.counts[last]}", fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     return ("The estimator the report quotes: n against the seed-averaged radius of gyration along the growth, "
             "log-log, with the line fitted over the window chosen from the data (shaded).")
 
@@ -418,10 +408,10 @@ def _mass_radius(sweep, path):
 def _anisotropy(sweep, path):
     if not np.isfinite(sweep.s["anisotropy"].values).any():
         return None
-    fig, (ax,) = _figure(1, 6.5, 4.2)
+    fig, (ax,) = new_figure(1, 6.5, 4.2)
     for c, config in enumerate(sweep.configs[:10]):
         mean, err = sweep.bars("anisotropy", config)
-        ax.errorbar(sweep.counts * 1.02 ** c, mean, yerr=err, color=_colour(c), marker="o", capsize=2,
+        ax.errorbar(sweep.counts * 1.02 ** c, mean, yerr=err, color=colour_of(c), marker="o", capsize=2,
                     label=sweep.label(config))
     ax.axhline(0, color="k", lw=0.8)
     _log_x(ax)
@@ -430,7 +420,7 @@ def _anisotropy(sweep, path):
     ax.set_ylabel("anisotropy of the outer mass" + (" (95% CI)" if ci else ""))
     ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
-    _save(fig, path)
+    save_figure(fig, path)
     return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds"
             + (" with its 95% CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
             "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N).")
@@ -445,7 +435,7 @@ def _dimension_spread(sweep, path):
     last = len(sweep.counts) - 1
     shown = sweep.configs[:20]
     ci = _any_ci(sweep, "D")
-    fig, (ax,) = _figure(1, max(5.0, 0.6 * len(shown) + 2), 4.2)
+    fig, (ax,) = new_figure(1, max(5.0, 0.6 * len(shown) + 2), 4.2)
     for c, config in enumerate(shown):
         for e, (name, prefix) in enumerate((("mass-radius, per cluster", "D_cluster"),
                                             ("box counting, per cluster", "D_box_cluster"))):
@@ -465,7 +455,7 @@ def _dimension_spread(sweep, path):
     ax.set_ylabel("D")
     ax.set_title(f"Spread of D over seeds at N={sweep.counts[last]}")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    _save(fig, path)
+    save_figure(fig, path)
     return ("D of every seed's own fit at the largest count, both estimators (red crosses: the fit's local slope "
             "is not flat), and the ensemble headline (black)" + (" with its 95% CI." if ci else
                                                                   f", no CI: fewer than {MIN_CI_SEEDS} seeds."))
@@ -474,12 +464,12 @@ def _dimension_spread(sweep, path):
 def _diffusion_times(sweep, path):
     if not np.isfinite(sweep.s["diffusion_density"].values).any():
         return None
-    fig, (hist, depth) = _figure(2, 5.0, 3.8)
+    fig, (hist, depth) = new_figure(2, 5.0, 3.8)
     bins, depths = sweep.s["diffusion_bin"].values, sweep.s["depth_bin"].values
     jumps = {c: bool(sweep.param("jumps", c)) for c in sweep.configs[:10]}
     for c, config in enumerate(jumps):
         # Times with and without jumps count different moves: the line style keeps them apart.
-        style = dict(color=_colour(c), ls="-" if jumps[config] else "--")
+        style = dict(color=colour_of(c), ls="-" if jumps[config] else "--")
         density = sweep.at("diffusion_density", config)
         hist.step(bins, np.where(density > 0, density, np.nan), where="mid", label=sweep.label(config), **style)
         depth.semilogy(depths, sweep.at("diffusion_median", config), marker="o", ms=3, **style)
@@ -498,7 +488,7 @@ def _diffusion_times(sweep, path):
         depth.yaxis.set_major_formatter(ScalarFormatter())
         depth.yaxis.set_minor_formatter(ScalarFormatter())
     fig.suptitle("Diffusion times, pooled over the stored clusters")
-    _save(fig, path)
+    save_figure(fig, path)
     unit = {frozenset([False]): " Every walk here takes single steps (jumps off): a move is one step.",
             frozenset([True]): " Walkers here jump far from the cluster: a first-passage jump counts as one move "
                                "however far it goes, so the time counts moves, not walk steps.",
@@ -523,7 +513,7 @@ def _speed_accuracy(sweep, path):
     others = [d for d in sweep.config_dims if d not in methods and sweep.ds.sizes[d] > 1]
     families = list(dict.fromkeys(["exact", *(sweep.family(c) for c, _ in pairs)]))
     members = {}
-    fig, (dev_d, dev_rg) = _figure(2, 5.0, 4.4)
+    fig, (dev_d, dev_rg) = new_figure(2, 5.0, 4.4)
     for config, ref in pairs:
         row = sweep.row(config, last)
         family = sweep.family(config)
@@ -532,8 +522,8 @@ def _speed_accuracy(sweep, path):
         fill = _FILLS[members.setdefault(family, []).__len__() % len(_FILLS)]
         members[family].append(config)
         label = sweep.variant(config) + (f" ({sweep.label(config, others)})" if others else "")
-        style = dict(color=_colour(f), marker=_MARKERS[f % len(_MARKERS)], ms=10 if f == 0 else 6, capsize=2,
-                     ls="none", fillstyle=fill, mec="k" if row["pareto"] else _colour(f))
+        style = dict(color=colour_of(f), marker=_MARKERS[f % len(_MARKERS)], ms=10 if f == 0 else 6, capsize=2,
+                     ls="none", fillstyle=fill, mec="k" if row["pareto"] else colour_of(f))
         for ax, name in ((dev_d, "D"), (dev_rg, "rg_mean")):
             y, err = row[f"{name}_vs_exact"], row[f"{name}_vs_exact_half_width"]
             if np.isfinite(y):
@@ -554,7 +544,7 @@ def _speed_accuracy(sweep, path):
     fig.legend(handles, labels, loc="outside lower center", fontsize=6, ncols=3,
                title="variant (colour and marker: the shortcuts taken; fill: which of them)", title_fontsize=7)
     fig.suptitle(f"Speed against accuracy at N={sweep.counts[last]}")
-    _save(fig, path)
+    save_figure(fig, path)
     return ("Cost per particle against the departure from the exact method (" + ", ".join(
         f"{m}={text(EXACT_METHOD[m])}" for m in methods) + ") with the other parameters equal, at the largest count: "
         "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
@@ -617,14 +607,14 @@ def _failure(sweep, path):
     last = len(sweep.counts) - 1
     every = sweep.scenes()
     scenes = every[:10]
-    fig, panels = _figure(2 * len(methods), 4.0, 3.3)
+    fig, panels = new_figure(2 * len(methods), 4.0, 3.3)
     drawn = set()
     for p, axis in enumerate(methods):
         for panel, name, label in ((panels[2 * p], "D", "D, mass-radius"), (panels[2 * p + 1], "rg_over_rmax",
                                                                               "Rg / R_max")):
             for c, base in enumerate(scenes):
                 # Scenes side by side, 6 points apart: their points share x.
-                drawn |= _failure_series(sweep, panel, axis, name, base, _colour(c) if len(scenes) > 1 else "C0",
+                drawn |= _failure_series(sweep, panel, axis, name, base, colour_of(c) if len(scenes) > 1 else "C0",
                                          sweep.scene_label(base), last, 6 * (c - (len(scenes) - 1) / 2))
             if name == "D" and sweep.reference:
                 panel.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
@@ -634,7 +624,7 @@ def _failure(sweep, path):
     numbers = "\n(numbers: bias in units of the combined 95% CI half-width)" if "bias" in drawn else ""
     fig.suptitle(f"Shortcuts against the exact method at N={sweep.counts[last]}, the model's parameters equal"
                  + numbers, fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     return _failure_caption(methods, scenes, len(every), drawn)
 
 
@@ -769,8 +759,9 @@ def _write_report(sweep, figures, path) -> Path:
         "Box counting, a finite-cluster estimate that reads low (not an equal of the above): "
         + "; ".join(f"{label}: {_interval(row, 'D_box')}" for label, row in rows) + ".",
         "",
-        f"Reference: 2D off-lattice DLA D = 1.7100(3) (Menshutin et al. 2008), 1.715(4) (Tolman and Meakin "
-        f"1989); 3D DLA about 2.50. This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
+        f"Reference: 2D off-lattice DLA D = {REFERENCE_D[2]:.4f}(3) (Menshutin et al. 2008), 1.715(4) (Tolman and "
+        f"Meakin 1989); 3D DLA about {REFERENCE_D[3]:.2f}. "
+        f"This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
         "",
         "## How D is measured, and how far to trust it",
         "",
@@ -809,45 +800,3 @@ def _write_report(sweep, figures, path) -> Path:
 
 
 # Benchmark ----------------------------------------------------------------
-
-def plot_bench(ds, outdir) -> Path:
-    """Draw kernel time against N, log-log, one line per model, to ``bench.png``.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        As from ``dlasweep.bench.run_bench``: dimension ``run``, coordinates
-        ``model``, ``method`` (``exact`` or ``naive``) and ``n``, variable
-        ``seconds``, attributes ``bench.exponent_attribute(<model>)``.
-    outdir : str or Path
-        Created when missing.
-
-    Returns
-    -------
-    Path
-        The PNG written.
-    """
-    out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
-    model = np.array([str(plain(v)) for v in ds["model"].values])
-    method = np.array([str(plain(v)) for v in ds["method"].values])
-    n, seconds = ds["n"].values.astype(float), ds["seconds"].values.astype(float)
-    fig, (ax,) = _figure(1, 6.5, 4.5)
-    for c, name in enumerate(dict.fromkeys(model)):
-        exponent = ds.attrs.get(exponent_attribute(name))
-        fitted = f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else ""
-        for kind, style, label in (
-            ("exact", dict(marker="o", ls="-"), name + fitted),
-            ("naive", dict(marker="x", ls=":", ms=8), f"{name}, naive walk (single steps, kill circle)"),
-        ):
-            pick = (model == name) & (method == kind)
-            if pick.any():
-                order = np.argsort(n[pick])
-                ax.loglog(n[pick][order], seconds[pick][order], color=_colour(c), label=label, **style)
-    ax.set_xlabel("particles N")
-    ax.set_ylabel("wall time to grow (s), one core")
-    ax.set_title("Kernel time against cluster size")
-    ax.legend(fontsize=7)
-    path = out / "bench.png"
-    _save(fig, path)
-    return path

@@ -161,24 +161,6 @@ SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "a
            "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
-MIB = "2^20 byte"
-"""The units of memory sizes (MiB, which udunits does not know)."""
-
-BENCH_SCHEMA = {
-    "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
-    "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
-    "walk_steps": Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
-    # MiB, in words udunits reads
-    "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
-    "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
-    "n": Variable(("run",), np.int64, "1", "target particle count"),
-    "model": Variable(("run",), str, None, "model and dimension"),
-    "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
-}
-"""The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
-its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
-
-
 def blank(name, shape) -> np.ndarray:
     """An array for variable ``name`` of ``SCHEMA``, of its type, every entry missing (``Variable.missing``)."""
     var = SCHEMA[name]
@@ -205,7 +187,7 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     spec : dlasweep.spec.Spec
     scales : ndarray, (n_scales,)
     history : ndarray of int, (n_history,)
-        Counts of the growth history (``analysis.growth_counts``).
+        Counts of the growth history (``fit.growth_counts``).
     science : dict of ndarray
         ``box_count`` on ``(<axes>..., size, n_particles, seed, scale)``,
         ``radius_gyration_history`` on ``(<axes>..., size, seed, history)``,
@@ -542,9 +524,10 @@ def open_sweep(path, chunks=None) -> xr.Dataset:
     return _booleans(ds)
 
 
-def open_bench(path) -> xr.Dataset:
-    """Open, and read, a file ``dlasweep bench`` wrote (``BENCH_SCHEMA``); ``StoreError`` as ``open_sweep``."""
-    ds = _open(path, tuple(BENCH_SCHEMA))
+def open_whole(path, required=()) -> xr.Dataset:
+    """Open, and read whole, a small file dlasweep wrote (a benchmark's) with the variables ``required``;
+    ``StoreError`` as ``open_sweep``."""
+    ds = _open(path, required)
     try:
         return ds.load()
     except Exception as err:
@@ -553,10 +536,10 @@ def open_bench(path) -> xr.Dataset:
 
 
 def open_dataset(path) -> xr.Dataset:
-    """Open any file dlasweep wrote: a benchmark (dimension ``run``: ``open_bench``), else ``open_sweep``."""
+    """Open any file dlasweep wrote: a benchmark (dimension ``run``) whole (``open_whole``), else ``open_sweep``."""
     with _open(path, ()) as ds:
         bench = "run" in ds.dims
-    return open_bench(path) if bench else open_sweep(path)
+    return open_whole(path) if bench else open_sweep(path)
 
 
 def _open(path, required, chunks=None) -> xr.Dataset:
@@ -739,7 +722,7 @@ def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
     ds : xarray.Dataset
         Changed in place and returned.
     schema : dict, optional
-        Its variables' table (default ``SCHEMA``; ``BENCH_SCHEMA`` for ``dlasweep bench``).
+        Its variables' table (default ``SCHEMA``; ``bench.BENCH_SCHEMA`` for ``dlasweep bench``).
     **globals_
         More global attributes (``featureType``), put first with ``Conventions`` and ``source``.
     """

@@ -1,28 +1,21 @@
 """Run a sweep on dask: batches of clusters as tasks, each batch saved as it arrives.
 
-Every cluster task grows one (swept params, size, seed) cluster once, to the
-largest particle count, and measures each count as a prefix. Its random
-stream is ``SeedSequence(root_seed, spawn_key=grid indices)``, so results do
-not depend on how many workers there are, in which order tasks finish, or
-how they are batched. A dask task runs a batch of consecutive cluster tasks
-worth about ``TASK_SECONDS`` (``_batch_size``), so that small clusters do not
-pay dask's and the part files' overhead one by one.
+Every cluster task (``task.measure_task``) grows one (swept params, size,
+seed) cluster from its own random stream, so results do not depend on how
+many workers there are, in which order tasks finish, or how they are
+batched. A dask task runs a batch of consecutive cluster tasks worth about
+``TASK_SECONDS`` (``_batch_size``), so that small clusters do not pay dask's
+and the part files' overhead one by one.
 
-Finished batches go at once to ``OUT.parts/part-<id>.npz`` (written under a
-temporary name, then renamed; see ``Parts``). ``resume=True`` keeps the
-clusters finished there and computes the rest; ``OUT.parts/manifest.json``
-records the spec's identity so that a changed spec is refused. A run holds
-an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
-same output is refused, and a killed run's lock is free at once. The stored
-clusters' positions go into the file's per-particle variables while the
-sweep runs, each as soon as every cluster before it has finished
-(``OUT.parts/particles.nc``, ``store.ParticleWriter``), so memory holds a
-few parts at a time (``Parts`` lets their positions go once written) and
-the compression overlaps the growth. At the end the
-dataset is assembled from the parts in one pass without the positions,
-written into that file, and the file renamed to OUT. Positions are kept
-only for the clusters ``[run] store_clusters`` stores (``Spec.stores``);
-every cluster's curves, its Rg along the growth included, are kept.
+Each finished batch goes at once to the parts folder ``OUT.parts``
+(``parts``), which a resumed run reads back; a changed spec, or a second
+run on the same output, is refused there. The stored clusters' positions go
+into the file's per-particle variables while the sweep runs, each as soon
+as every cluster before it has finished (``OUT.parts/particles.nc``,
+``store.ParticleWriter``), so memory holds a few parts at a time and the
+compression overlaps the growth. At the end the dataset is assembled from
+the parts in one pass without the positions, written into that file, and
+the file renamed to OUT. What a task does on a worker is ``task``'s.
 This is the only module that knows dask.
 
 Precision on demand (``[run] target_ci``): the seeds of the spec are a first
@@ -40,7 +33,6 @@ half-widths and why the sweep stopped (``store.record_stop``).
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import functools
 import gc
 import importlib
@@ -49,10 +41,7 @@ import json
 import logging
 import math
 import os
-import shutil
-import socket
 import sys
-import tempfile
 import threading
 import uuid
 import warnings
@@ -61,14 +50,14 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import measure, store
-from .analysis import growth_counts, headline
-from .grow import compiled, grow, grow_many
-from .params import STATUSES
+from . import store
+from .analysis import headline
+from .fit import growth_counts
+from .grow import compiled
+from .parts import PARTICLES, Parts, parts_folder
 from .progress import Lines
-from .spec import Spec, differences, load_spec
-
-MANIFEST, LOCK, PARTICLES = "manifest.json", ".lock", "particles.nc"
+from .spec import Spec, load_spec
+from .task import error_result, measure_tasks, sweep_scales
 
 TASK_SECONDS = 0.25
 """Work given to one dask task: its overhead (scheduling, a part file: milliseconds)
@@ -87,19 +76,6 @@ threads, whole sweep: 0.005 s 15.1-15.4 s; 0.001 s 14.4-14.5; 0.0005 s 14.1-15.1
 TARGET_REACHED, CAP_REACHED, TASKS_FAILED = "target_ci reached", "max_seeds reached", "tasks failed"
 """Why a target sweep stopped (its ``stop_reason``); failed tasks stop it so that
 ``--resume`` retries them rather than seeds being added around them."""
-
-
-class ResumeError(ValueError):
-    """The parts folder does not fit this run (changed spec, or no --resume), or another run holds it."""
-
-
-class Interrupted(KeyboardInterrupt):
-    """Ctrl-C during a sweep that writes a file: ``kept`` finished clusters stay in the parts folder
-    ``parts`` for ``--resume``; ``parts`` is None when the folder was removed, nothing having finished."""
-
-    def __init__(self, kept, parts):
-        super().__init__(kept, parts)
-        self.kept, self.parts = kept, parts
 
 
 def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=None,
@@ -152,7 +128,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         progress = sys.stderr.isatty()
     # Tasks the sweep may run at most: the embedded cluster needs no more threads.
     most = math.prod(spec.shape[:-1]) * (spec.max_seeds or len(spec.seeds))
-    with _parts_folder(spec, out, resume) as parts, contextlib.ExitStack() as session:
+    with parts_folder(spec, out, resume) as parts, contextlib.ExitStack() as session:
         batch, dask_client, stream = spec, None, None
         while True:
             todo = [t for t in batch.tasks() if not parts.finished(t.key)]
@@ -259,16 +235,6 @@ def _first_task_of_each_model(spec) -> dict:
     return first
 
 
-def sweep_scales(spec: Spec) -> np.ndarray:
-    """Box sides every task measures: up to an extent no cluster can exceed.
-
-    A bounded cluster (and its line seed) fits its box; an unbounded,
-    connected one of n particles spans at most n (+ a seed block). The
-    axis is trimmed to the clusters after the sweep.
-    """
-    return measure.default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
-
-
 def _batch_size(spec, n_todo, threads) -> int:
     """Cluster tasks per dask task: about ``TASK_SECONDS`` of work, yet at least 4 dask tasks per thread."""
     per_cluster = SECONDS_PER_PARTICLE * spec.counts[-1]
@@ -283,340 +249,6 @@ def _batches(todo, size, threads):
         n = max(1, min(size, (len(todo) - start) // (2 * threads)))
         yield todo[start:start + n]
         start += n
-
-
-def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
-    """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task.
-
-    ``stored``: per task, whether its positions are kept (``Spec.stores``).
-    Each run of tasks with the same parameters grows in one compiled call
-    (``grow_many``); if that raises, each of its tasks grows alone, so that
-    only the clusters that fail are marked failed.
-    """
-    history = growth_counts(counts)
-    results = []
-    for _, run in itertools.groupby(zip(tasks, stored), key=lambda pair: pair[0].params):
-        run = list(run)
-        try:
-            clusters = grow_many(counts[-1], [_stream(root_seed, task) for task, _ in run], checkpoints=counts,
-                                 **run[0][0].params)
-        except Exception:  # noqa: BLE001 (each task then grows alone and records its own error)
-            clusters = [None] * len(run)
-        results += [measure_task(task, counts, scales, root_seed, keep, history, cluster)
-                    for (task, keep), cluster in zip(run, clusters)]
-    return results
-
-
-def measure_task(task, counts, scales, root_seed, stored, history, cluster=None) -> dict:
-    """Grow one cluster (unless ``cluster`` is the one grown) and measure every count; runs on a worker.
-
-    Its Rg along the growth is kept at ``history`` (``growth_counts(counts)``,
-    computed once per batch); its positions and diffusion times only when
-    ``stored`` (else empty). Never raises: a failure is returned as an
-    ``error`` result with its message.
-    """
-    try:
-        if cluster is None:
-            cluster = grow(counts[-1], _stream(root_seed, task), checkpoints=counts, **task.params)
-        points = cluster.points
-        reached = np.asarray(counts) <= len(points)
-        prefix = np.minimum(counts, len(points))
-        lattice = cluster.params["model"] == "lattice"
-        measures = measure.cluster_measures(points, prefix, history, lattice=lattice, scales=scales)
-        return {
-            **measures,
-            "n_grown": prefix.astype(np.int64),
-            "status": np.where(reached, 0, STATUSES.index(cluster.status)).astype(np.int8),
-            "wall_time": np.where(np.isnan(cluster.times), cluster.seconds, cluster.times),
-            "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
-            "points": points if stored else points[:0],
-            "diffusion_time": np.asarray(cluster.steps if stored else cluster.steps[:0], np.int64),
-            "parent": np.asarray(cluster.parents if stored else cluster.parents[:0], np.int32),
-            "error": np.array(""),
-        }
-    except Exception as err:
-        return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
-
-
-def _stream(root_seed, task) -> np.random.SeedSequence:
-    """The task's random stream: from the root seed and its grid indices."""
-    return np.random.SeedSequence(root_seed, spawn_key=task.spawn_key)
-
-
-def error_result(counts, n_scales, dim, message) -> dict:
-    """The result recorded for a task that raised (or whose worker kept dying)."""
-    n_counts = len(counts)
-    shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
-    result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
-    result["status"][:] = STATUSES.index("error")
-    return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
-            "parent": store.blank("parent", 0), "error": np.array(store.one_line(message))}
-
-
-class Parts:
-    """The folder of finished cluster results of one sweep.
-
-    Each ``part-<id>.npz`` holds a batch of results: its ``keys`` and
-    ``failed`` arrays index them, member ``<name>`` holds variable ``name`` of
-    them all, flattened and concatenated, and ``<name>.shape`` the shape of
-    each: a few zip members per part, since one per variable and cluster
-    took as long to write and read as 10^3-particle clusters take to grow.
-    A cluster is finished when a part holds it without
-    error; a failed one is computed again on resume, and a later part then
-    holds it too. Knowing what is done reads only the indexes, once. The
-    sweep sets ``done`` once its file is complete: the folder is removed.
-
-    The parts this run writes are also kept in memory, up to ``KEEP_BYTES``
-    for the clusters' positions and diffusion times and as much again for
-    the rest: assembling the dataset and writing its file then read back
-    only what an earlier run wrote, or what did not fit.
-    """
-
-    KEEP_BYTES = 1 << 28
-    PER_PARTICLE = ("points", "diffusion_time", "parent")
-
-    def __init__(self, path: Path):
-        self.path = path
-        self.done = False
-        self._where = None
-        self._kept, self._kept_bytes = {}, {"clusters": 0, "science": 0}
-
-    @property
-    def where(self) -> dict:
-        """Task key -> (part file, position in it, failed); a finished result wins over a failed one."""
-        if self._where is None:
-            self._where = {}
-            for file in sorted(self.path.glob("part-*.npz")):
-                with self._reading(file), np.load(file) as z:
-                    self._add(self._where, file, z["keys"], z["failed"])
-        return self._where
-
-    @staticmethod
-    def _add(index, file, keys, failed):
-        for i, (key, fail) in enumerate(zip(keys.tolist(), failed.tolist())):
-            if not (fail and key in index):
-                index[key] = (file, i, fail)
-
-    @staticmethod
-    @contextlib.contextmanager
-    def _reading(file):
-        try:
-            yield
-        except Exception as err:  # only a crash of the machine itself can leave one damaged
-            raise OSError(f"{file}: unreadable ({err}); delete it and run again with --resume") from None
-
-    def write(self, results: dict):
-        """Save a batch of results (by task key) as one part."""
-        index = self.where  # read before the new part is there
-        file = self.path / f"part-{uuid.uuid4().hex}.npz"
-        tmp = self.path / f".{file.name}.tmp"
-        keys = np.array(list(results))
-        failed = np.array([str(r["error"]) != "" for r in results.values()])
-        members = {}
-        for name in next(iter(results.values())):
-            each = [np.asarray(r[name]) for r in results.values()]
-            # Empty arrays (a failed cluster's points) must not set the dtype of the others.
-            members[name] = np.concatenate([v.ravel() for v in each if v.size] or [each[0].ravel()])
-            members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)
-        try:
-            with open(tmp, "wb") as f:
-                np.savez(f, keys=keys, failed=failed, **members)
-        except BaseException:  # a full disk, a kill: no half-written part stays
-            tmp.unlink(missing_ok=True)
-            raise
-        os.replace(tmp, file)
-        self._add(index, file, keys, failed)
-        clusters = {name: members[name] for name in self.PER_PARTICLE}
-        science = {name: values for name, values in members.items() if name not in self.PER_PARTICLE}
-        kept = {"keys": keys}
-        for group, values in (("clusters", clusters), ("science", science)):
-            size = sum(v.nbytes for v in values.values())
-            if self._kept_bytes[group] + size <= self.KEEP_BYTES:
-                kept.update(values)
-                self._kept_bytes[group] += size
-        if self.PER_PARTICLE[0] in kept:  # their shapes come along (tiny: not counted)
-            kept.update({f"{name}.shape": members[f"{name}.shape"] for name in self.PER_PARTICLE})
-        if len(kept) > 1:
-            self._kept[file] = kept
-
-    def finished(self, key) -> bool:
-        return key in self.where and not self.where[key][2]
-
-    @property
-    def n_finished(self) -> int:
-        """How many clusters the folder holds finished (failed ones are computed again on resume)."""
-        return sum(not failed for _, _, failed in self.where.values())
-
-    @contextlib.contextmanager
-    def _members(self, file, kept, names):
-        """A part's members: those ``kept`` in memory when they hold every one of ``names``, else its file."""
-        with self._reading(file), (contextlib.nullcontext(kept) if all(name in kept for name in names)
-                                   else np.load(file)) as z:
-            yield z
-
-    def results(self, keys, names, release=False):
-        """Variables ``names`` of the result of each key, in order; a part is read once for each run of its keys.
-
-        Only those members are read: the clusters' positions, say, or
-        everything but them. ``<name>.shape`` gives a variable's shape
-        without reading it. ``release``: the positions kept in memory of
-        each part read are let go (a later read takes them from its file).
-        """
-        for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
-            if release and self.PER_PARTICLE[0] in self._kept.get(file, {}):
-                clusters = {name: self._kept[file].pop(name) for name in self.PER_PARTICLE}
-                self._kept_bytes["clusters"] -= sum(values.nbytes for values in clusters.values())
-                kept = {**self._kept[file], **clusters}  # for this read
-            else:
-                kept = self._kept.get(file, {})
-            with self._members(file, kept, names) as z:
-                part = [{} for _ in z["keys"]]
-                for name in names:
-                    if name.endswith(".shape"):
-                        for result, shape in zip(part, z[name]):
-                            result[name] = shape
-                        continue
-                    flat, shapes = z[name], z[f"{name}.shape"]
-                    sizes = shapes.prod(axis=1)
-                    ends = np.cumsum(sizes)
-                    for result, shape, start, end in zip(part, shapes.tolist(), (ends - sizes).tolist(), ends.tolist()):
-                        result[name] = flat[start:end].reshape(shape)
-            yield from (part[self.where[key][1]] for key in run)
-
-    def table(self, keys, names) -> dict:
-        """Variables ``names`` of the results of ``keys``, each stacked on a first axis in key order.
-
-        For variables of one shape in every result (the science, and the
-        ``<name>.shape`` rows): a part's values are taken whole, not a result
-        at a time, so assembling 10^4 small clusters costs milliseconds.
-        """
-        keys = list(keys)
-        table = {}
-        for file, run in itertools.groupby(enumerate(keys), lambda item: self.where[item[1]][0]):
-            rows, at = zip(*((i, self.where[key][1]) for i, key in run))
-            with self._members(file, self._kept.get(file, {}), names) as z:
-                for name in names:
-                    values = z[name]
-                    if not name.endswith(".shape"):
-                        shapes = z[f"{name}.shape"]
-                        if (shapes != shapes[0]).any():
-                            raise ValueError(f"{file}: {name} differs in shape between results")
-                        values = values.reshape(len(shapes), *shapes[0])
-                    if name not in table:
-                        table[name] = np.empty((len(keys), *values.shape[1:]), values.dtype)
-                    elif np.result_type(table[name], values) != table[name].dtype:  # a longer error message
-                        table[name] = table[name].astype(np.result_type(table[name], values))
-                    table[name][list(rows)] = values[list(at)]
-        return table
-
-
-@contextlib.contextmanager
-def _parts_folder(spec, out, resume):
-    """The parts folder of ``out``, checked against the spec and locked for the whole run.
-
-    A new folder is made whole (manifest written, lock held) under a
-    temporary name and renamed into place, so no other run sees it half made.
-    It is removed when the run sets ``done``, and when a run that made it
-    fails before any part is saved: renamed away under the lock, so no other
-    run finds it half deleted, then deleted once the lock is released.
-    """
-    identity = {"digest": spec.digest(), "identity": spec.identity()}
-    if out is None:
-        with tempfile.TemporaryDirectory(prefix="dlasweep-") as tmp:
-            yield Parts(Path(tmp))
-        return
-    path = Path(f"{out}.parts")
-    aside = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}")
-    lock = None if path.exists() else _new_folder(path, aside, identity)
-    made = lock is not None
-    if not made:
-        lock = _lock(path)
-    parts, removed = Parts(path), False  # reads nothing before the manifest is checked
-    try:
-        if not made:
-            _check_manifest(path, identity, resume)
-        try:
-            yield parts
-        except BaseException as err:
-            parts.done = parts.done or (made and not any(path.glob("*.npz")))
-            if isinstance(err, KeyboardInterrupt) and not isinstance(err, Interrupted):
-                raise (Interrupted(0, None) if parts.done else Interrupted(parts.n_finished, path)) from err
-            raise
-        finally:
-            if parts.done:
-                path.rename(aside)
-                removed = True
-    finally:
-        if not removed:
-            # A folder that stays keeps no lock file naming an ended run; ``_lock``
-            # never holds one deleted under it.
-            (path / LOCK).unlink(missing_ok=True)
-        os.close(lock)
-        if removed:
-            shutil.rmtree(aside, ignore_errors=True)
-
-
-def _new_folder(path, staging, identity):
-    """Make the parts folder ``path`` in ``staging``; its lock, or None if another run made it first."""
-    staging.mkdir()
-    lock = _lock(staging)
-    try:
-        (staging / MANIFEST).write_text(json.dumps(identity, indent=1))
-        staging.rename(path)
-    except OSError:
-        os.close(lock)
-        shutil.rmtree(staging, ignore_errors=True)
-        if path.is_dir():  # another run made it first
-            return None
-        raise
-    return lock
-
-
-def _lock(folder) -> int:
-    """Lock a parts folder for this process; return the lock file's descriptor.
-
-    An flock ends with its process, so the lock file of a killed run is
-    taken over at once. The file names its holder, for the runs it refuses.
-
-    Raises
-    ------
-    ResumeError
-        When another run holds the lock, or has just removed the folder.
-    """
-    file = folder / LOCK
-    while True:
-        try:
-            fd = os.open(file, os.O_RDWR | os.O_CREAT, 0o644)
-        except FileNotFoundError:
-            raise ResumeError(f"{folder}: removed by the run that held it, which has ended") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.read(fd, 256).decode(errors="replace") or "another process"
-            os.close(fd)
-            raise ResumeError(f"{folder}: in use by {holder}; wait for it to end, or stop it") from None
-        with contextlib.suppress(FileNotFoundError):
-            if os.path.samestat(os.fstat(fd), os.stat(file)):
-                break
-        os.close(fd)  # its holder deleted it on leaving, after we opened it: lock the one there now
-    os.ftruncate(fd, 0)
-    os.write(fd, f"process {os.getpid()} on {socket.gethostname()}".encode())
-    return fd
-
-
-def _check_manifest(path, identity, resume):
-    """Refuse an existing parts folder without ``resume``, or from another spec (``ResumeError``)."""
-    if not resume:
-        raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
-    manifest = path / MANIFEST
-    try:
-        old = json.loads(manifest.read_text())
-    except (OSError, ValueError):
-        raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh") from None
-    if old.get("digest") != identity["digest"]:
-        changes = differences(old.get("identity", {}), identity["identity"])
-        raise ResumeError(f"cannot resume: the spec differs from the one in {path} ("
-                          + "; ".join(changes) + ")")
 
 
 def _load_kernels(spec):

@@ -30,6 +30,33 @@ root_seed = 12345
 """Twelve small clusters: one swept parameter, a bounded and an unbounded box."""
 
 
+def colours_shown(path) -> dict:
+    """The colours a picture shows and how many pixels each covers, white and greys (text, axes) left out.
+
+    A PNG is read as it is; an SVG by the images it embeds (a lattice cluster is one).
+    """
+    import base64
+    import io
+    import re
+
+    import numpy as np
+    from PIL import Image
+
+    path = Path(path)
+    if path.suffix == ".svg":
+        embedded = re.findall(r'xlink:href="data:image/png;base64,([^"]*)"', path.read_text())
+        pictures = [io.BytesIO(base64.b64decode("".join(data.split()))) for data in embedded]
+    else:
+        pictures = [path]
+    shown = {}
+    for picture in pictures:
+        rgb = np.asarray(Image.open(picture).convert("RGB")).reshape(-1, 3).astype(int)
+        coloured = rgb[rgb.max(axis=1) > rgb.min(axis=1)]
+        for colour, count in zip(*np.unique(coloured, axis=0, return_counts=True)):
+            shown[tuple(colour)] = shown.get(tuple(colour), 0) + int(count)
+    return shown
+
+
 @pytest.fixture
 def write_spec(tmp_path):
     """Write spec text (dedented) to a TOML file and return its path."""
@@ -89,9 +116,9 @@ def files_under(path: Path) -> set:
 @pytest.fixture
 def replicate_1_fails(monkeypatch):
     """Make growing replicate 1 of every configuration raise, as a bug in a kernel would."""
-    from dlasweep import sweep
+    from dlasweep import task as worker
 
-    real_grow, real_grow_many = sweep.grow, sweep.grow_many
+    real_grow, real_grow_many = worker.grow, worker.grow_many
 
     def grow(n, seed, **kwargs):
         if seed.spawn_key[-1] == 1:
@@ -103,8 +130,8 @@ def replicate_1_fails(monkeypatch):
             raise RuntimeError("simulated failure")
         return real_grow_many(n, seeds, **kwargs)
 
-    monkeypatch.setattr(sweep, "grow", grow)
-    monkeypatch.setattr(sweep, "grow_many", grow_many)
+    monkeypatch.setattr(worker, "grow", grow)
+    monkeypatch.setattr(worker, "grow_many", grow_many)
 
 
 _APT_UPDATED = []

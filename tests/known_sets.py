@@ -52,6 +52,15 @@ def sierpinski_gasket(level):
     return np.c_[x[keep], y[keep]]
 
 
+def pascal_gasket(level):
+    """Pascal's triangle mod 2 on 2**level rows: C(i, j) is odd iff j's bits are among i's (Lucas).
+
+    ``sierpinski_gasket`` mirrored (i = 2**level - 1 - x), in row order.
+    """
+    i, j = np.mgrid[0 : 2**level, 0 : 2**level]
+    return np.argwhere((i & j) == j)
+
+
 CARPET = [p for p in itertools.product(range(3), repeat=2) if p != (1, 1)]
 VICSEK = [(0, 0), (0, 2), (1, 1), (2, 0), (2, 2)]
 DUST_2D = list(itertools.product((0, 2), repeat=2))

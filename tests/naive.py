@@ -3,8 +3,8 @@
 Each computes one documented quantity the direct way, one point (one box,
 one prefix) at a time, for small inputs, reusing nothing of the package.
 Among them the kernels' references: a lattice walk of single steps and a
-walk-on-spheres. (Brute-force distances and contacts are one-line numpy
-expressions or k-d tree queries beside their tests.)
+walk-on-spheres, and the contact checks of grown clusters (every particle
+rests on an earlier one, none overlap).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import itertools
 import math
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def grid_offsets(scales, offsets=4):
@@ -106,6 +107,101 @@ def walk_on_spheres_exterior(dim, r0, far, n, rng, eps=1e-7):
         u /= np.linalg.norm(u, axis=1)[:, None]
         x[idx] += np.minimum(r - 1, far - r)[:, None] * u + 1e-12
     return x / np.linalg.norm(x, axis=1)[:, None], hit
+
+
+def _lattice_contacts(dim, moore):
+    for d in itertools.product((-1, 0, 1), repeat=dim):
+        a = np.abs(d)
+        if (a.max() == 1) if moore else (a.sum() == 1):
+            yield np.array(d)
+
+
+def seed_count(params):
+    """Particles placed before growth starts."""
+    return {"point": 1, "block": 2 ** params["dim"], "line": 0}[params["seed_shape"]]
+
+
+def assert_lattice_connected(points, params):
+    """Every particle is a neighbour of an earlier one (or of the substrate)."""
+    dim = params["dim"]
+    line = params["seed_shape"] == "line"
+    period = params["size"]
+    seeds = seed_count(params)
+    contacts = list(_lattice_contacts(dim, params["neighbours"] == 3**dim - 1))
+    index = {}
+    for i, p in enumerate(map(tuple, points)):
+        assert p not in index, f"site {p} used twice (particles {index.get(p)} and {i})"
+        if line:
+            assert all(0 <= c < period for c in p[:-1]) and p[-1] >= 0
+        if i >= seeds and not (line and p[-1] == 0):
+            touching = False
+            for d in contacts:
+                q = np.array(p) + d
+                if line:
+                    q[:-1] %= period
+                if tuple(q) in index:
+                    touching = True
+                    break
+            assert touching, f"particle {i} at {p} touches no earlier particle"
+        index[p] = i
+
+
+def _periodic_tree(points, params):
+    if params["seed_shape"] == "line":
+        box = np.full(params["dim"], np.inf)
+        box[:-1] = params["size"]
+        shifted = points.copy()
+        shifted[:, -1] -= points[:, -1].min()  # cKDTree wants coordinates in [0, box)
+        return cKDTree(shifted, boxsize=np.where(np.isinf(box), shifted[:, -1].max() + 10, box)), shifted
+    return cKDTree(points), points
+
+
+def assert_offlattice_contacts(points, params, exact):
+    """No overlaps; each particle rests on an earlier one at distance 1."""
+    tree, pts = _periodic_tree(points, params)
+    seeds = seed_count(params)
+    dist, _ = tree.query(pts, k=2)
+    assert dist[:, 1].min() >= 1 - 1e-9, f"overlap: closest pair at {dist[:, 1].min()}"
+    if not exact:
+        return
+    for i in range(seeds, len(pts)):
+        if params["seed_shape"] == "line" and abs(points[i, -1]) < 1e-9:
+            continue
+        near = tree.query_ball_point(pts[i], 1 + 1e-9)
+        assert any(j < i for j in near), f"particle {i} touches no earlier particle"
+
+
+def contacts(points, params):
+    """Distance of each particle to the nearest earlier one (or substrate)."""
+    p = np.asarray(points)
+    line = params["seed_shape"] == "line"
+    out = []
+    for i in range(seed_count(params), len(p)):
+        d = p[:i] - p[i]
+        if line:
+            L = params["size"]
+            d[:, :-1] -= L * np.round(d[:, :-1] / L)
+        near = np.sqrt((d**2).sum(1)).min() if i else np.inf
+        if line:
+            near = min(near, 1.0 + p[i, -1])  # substrate: contact at up = 0
+        out.append(near)
+    return np.array(out)
+
+
+def min_pair(points, params):
+    """Distance of the closest pair of particles (across the periodic sides of a substrate)."""
+    p = np.asarray(points)
+    if params["seed_shape"] == "line":  # periodic sides: add images
+        L = params["size"]
+        shifts = [np.zeros(p.shape[1])]
+        for a in range(p.shape[1] - 1):
+            for s in (-L, L):
+                e = np.zeros(p.shape[1])
+                e[a] = s
+                shifts.append(e)
+        tree = cKDTree(p)
+        return min(tree.query(p + s, k=2)[0][:, 1 if not s.any() else 0].min() for s in shifts)
+    return cKDTree(p).query(p, k=2)[0][:, 1].min()
 
 
 def field_distances(field, dim, fw, cap):

@@ -8,7 +8,8 @@ from dlasweep.cli import main
 def test_bench_quick_writes_its_outputs(tmp_path):
     from matplotlib.image import imread
 
-    from dlasweep.store import BENCH_SCHEMA, attributes
+    from dlasweep.bench import BENCH_SCHEMA
+    from dlasweep.store import attributes
 
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "-o", str(out)]) == 0

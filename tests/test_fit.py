@@ -7,7 +7,8 @@ import pytest
 from scipy.stats import t as stats_t
 
 from dlasweep.fit import ensemble, fit_dimension, fit_mass_radius, seed_interval, t95
-from dlasweep.measure import box_counts, radius_of_gyration
+from dlasweep.boxes import box_counts
+from dlasweep.measure import radius_of_gyration
 from known_sets import KNOWN
 
 TWO_DECADES = 100

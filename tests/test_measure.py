@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 
 import dlasweep
 import naive
-from dlasweep import measure
-from dlasweep.measure import box_counts, default_scales, max_radius, radius_of_gyration
+from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
+from dlasweep import boxes, measure
+from dlasweep.boxes import box_counts, default_scales
+from dlasweep.measure import max_radius, radius_of_gyration
 
 
 def random_set(dim, lattice, n, width, seed):
@@ -68,18 +68,16 @@ def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, lattice, c
     # a larger side on.
     points = random_set(dim, lattice, 2000 if dim == 2 else 500, 120 if dim == 2 else 24, 7)
     expected = box_counts(points, lattice=lattice)
-    monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
+    monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
     np.testing.assert_array_equal(box_counts(points, lattice=lattice), expected)
 
 
 ROUTES = {
-    # How the sides counted from the particles are counted: the settings that
-    # force it, and the kernel (name, test on its arguments) whose call shows it ran.
-    "strips of sites": ({}, ("_mark_sites", lambda args: True)),
-    "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, ("_mark_boxes", lambda args: len(args[6]) > 1)),
-    "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12},
-                              ("_mark_boxes", lambda args: args[5] > 0 and len(args[6]) > 0)),
-    "boxes sorted": ({"_BITMAP_CAP": 0}, ("_mark_boxes", lambda args: len(args[6]) == 0)),
+    # How the sides counted from the particles are counted: the settings that force it, and its code.
+    "strips of sites": ({}, boxes.STRIPS),
+    "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, boxes.ONE_PASS),
+    "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12}, boxes.PASSES),
+    "boxes sorted": ({"_BITMAP_CAP": 0}, boxes.SORTED),
 }
 
 
@@ -95,22 +93,65 @@ def test_every_route_from_the_particles_matches_reference(monkeypatch, dim, kind
     # sides halved from them (or, where those do not fit, counted likewise).
     lattice = kind != "disks"
     points = random_set(dim, kind == "sites", 200 if lattice else 60, 40 if dim == 2 else 16, dim)
-    settings, (kernel, took) = ROUTES[route]
+    settings, code = ROUTES[route]
     for name, value in settings.items():
-        monkeypatch.setattr(measure, name, value)
-    calls = []
-    run = getattr(measure, kernel)
-    monkeypatch.setattr(measure, kernel, lambda *args: calls.append(args) or run(*args))
-    scales, counts = box_counts(points, lattice=lattice)
-    assert any(took(args) for args in calls), "the route did not run"
-    offsets = naive.grid_offsets(scales)
-    np.testing.assert_array_equal(counts, [naive.box_count(points, s, lattice, offsets[int(s)]) for s in scales])
+        monkeypatch.setattr(boxes, name, value)
+    counted = boxes.PrefixBoxes(points, None, lattice, None, 4)
+    counted.count()
+    assert code in counted.routes[0], "the route did not run"
+    offsets = naive.grid_offsets(counted.scales)
+    np.testing.assert_array_equal(counted.counts[0], [naive.box_count(points, s, lattice, offsets[int(s)])
+                                                      for s in counted.scales])
+    np.testing.assert_array_equal(box_counts(points, lattice=lattice)[1], counted.counts[0])
 
 
 def occupied(stack, shape):
     """Each grid's occupied boxes (rows of box indices, sorted) from its bitmap in ``stack``."""
     bits = np.unpackbits(stack.view(np.uint8), axis=-1, bitorder="little")[..., : shape[-1]]
     return [np.argwhere(grid.reshape(tuple(shape))) for grid in bits]
+
+
+def slab(shape):
+    """A grid's shape on the kernels' three axes (a 2D grid has one box on axis 0)."""
+    return (1,) * (3 - len(shape)) + tuple(int(n) for n in shape)
+
+
+def bitmaps(shape, grids):
+    padded = slab(shape)
+    return np.zeros((grids, padded[0] * padded[1], -(-padded[2] // 64)), np.uint64)
+
+
+def marked(points, side, offsets, radius):
+    """Every grid of ``side`` marked from the particles, in one pass: their bitmaps and shape."""
+    shape = np.floor((points.max(axis=0) + radius + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
+    stack = bitmaps(shape, len(offsets) ** points.shape[1])
+    boxes._mark_boxes(points.astype(float), np.array(offsets), float(side), radius, slab(shape), 0, stack,
+                      np.empty((0, 0), np.int64))
+    return stack, shape
+
+
+def merged(points, side, offsets):
+    """Every grid of ``side`` merged from strips of integer sites (one per offset on the last axis)."""
+    dim, high = points.shape[1], points.max(axis=0)
+    shape = np.floor((high + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
+    cells = np.r_[high[:-1] + 1, shape[-1]]
+    strips = bitmaps(cells, len(offsets))
+    boxes._mark_sites(points, np.array(offsets), float(side), tuple(int(n) for n in cells[:-1]), strips)
+    part, shift = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
+    part[2], shift[3 - dim : 2] = np.arange(len(offsets)), offsets
+    stack = bitmaps(shape, len(offsets) ** dim)
+    count = boxes._coarsen(strips, slab(cells), part, shift, slab((side,) * (dim - 1) + (1,)), stack, slab(shape))
+    return count, stack, shape
+
+
+def halved(fine, fine_shape, fine_offsets, side, offsets):
+    """Every grid of ``side`` from those of half the side (``fine``)."""
+    dim = len(fine_shape)
+    shape = fine_shape // 2 + 1
+    part, shift = boxes._halving(fine_offsets, side // 2, offsets, dim)
+    stack = bitmaps(shape, len(offsets) ** dim)
+    count = boxes._coarsen(fine, slab(fine_shape), part, shift, slab((2,) * dim), stack, slab(shape))
+    return count, stack, shape
 
 
 @pytest.mark.parametrize("lattice", [True, False])
@@ -120,49 +161,32 @@ def test_every_grid_merged_or_halved_holds_the_boxes_marked_from_the_particles(d
     # several words (bits move between words when a halved grid is shifted).
     points = random_set(dim, lattice, 3000 if dim == 2 else 6000, 300 if dim == 2 else 70, 11)
     points = points - points.min(axis=0)
-    high, radius = points.max(axis=0), 0.0 if lattice else 0.5
+    radius = 0.0 if lattice else 0.5
     offsets = {s: sorted(o) for s, o in naive.grid_offsets([1, 2, 4, 3, 6, 12]).items()}
-
-    def marked(side):
-        # Floating-point coordinates are never put in strips.
-        _, stack, shape = measure._from_points(points.astype(float), high, offsets[side], side, radius, keep=True)
-        return occupied(stack, shape)
-
     for base in (1, 3):
-        count, stack, shape = measure._from_points(points, high, offsets[base], base, radius, keep=True)
+        stack, shape = marked(points, base, offsets[base], radius)
+        count = min(map(len, occupied(stack, shape)))
+        if lattice and base > 1:  # integer sites: the grids merged from strips, as the lattice measures them
+            count, stack, shape = merged(points, base, offsets[base])
         for side in (base, 2 * base, 4 * base):
             if side > base:
-                count, stack, shape = measure._halve(stack, shape, offsets[side // 2], side, offsets[side])
-            expected = marked(side)
+                count, stack, shape = halved(stack, shape, offsets[side // 2], side, offsets[side])
+            expected = occupied(*marked(points, side, offsets[side], radius))
             assert len(occupied(stack, shape)) == len(expected) == len(offsets[side]) ** dim
             for got, want in zip(occupied(stack, shape), expected):
                 np.testing.assert_array_equal(got, want)
-            assert count == min(len(boxes) for boxes in expected)
-
-
-def ternary(level, dim, keep):
-    """Cells of [0, 3**level)**dim all of whose base-3 digit tuples are in ``keep``."""
-    cells = np.zeros((1, dim), np.int64)
-    for _ in range(level):
-        cells = (3 * cells[:, None, :] + np.array(sorted(keep))[None, :, :]).reshape(-1, dim)
-    return cells
-
-
-def gasket(level):
-    """Pascal's triangle mod 2 on 2**level rows: C(i, j) is odd iff j's bits are among i's (Lucas)."""
-    i, j = np.mgrid[0 : 2**level, 0 : 2**level]
-    return np.argwhere((i & j) == j)
+            assert count == min(len(grid) for grid in expected)
 
 
 SELF_SIMILAR = {
     # name: (points, side ratio, pieces, level)
-    "gasket": (gasket(10), 2, 3, 10),
+    "gasket": (pascal_gasket(10), 2, 3, 10),
     "square": (np.argwhere(np.ones((1024, 1024), bool)), 2, 4, 10),
-    "carpet": (ternary(5, 2, set(itertools.product(range(3), repeat=2)) - {(1, 1)}), 3, 8, 5),
-    "menger": (ternary(4, 3, {d for d in itertools.product(range(3), repeat=3) if d.count(1) < 2}), 3, 20, 4),
-    "dust2": (ternary(5, 2, set(itertools.product((0, 2), repeat=2))), 3, 4, 5),
-    "dust3": (ternary(4, 3, set(itertools.product((0, 2), repeat=3))), 3, 8, 4),
-    "vicsek": (ternary(5, 2, {(1, 1), (0, 1), (1, 0), (2, 1), (1, 2)}), 3, 5, 5),
+    "carpet": (iterated(CARPET, 5), 3, 8, 5),
+    "menger": (iterated(MENGER, 4), 3, 20, 4),
+    "dust2": (iterated(DUST_2D, 5), 3, 4, 5),
+    "dust3": (iterated(DUST_3D, 4), 3, 8, 4),
+    "vicsek": (iterated([(0, 1), (1, 0), (1, 1), (1, 2), (2, 1)], 5), 3, 5, 5),  # the plus: axis-aligned arms
 }
 
 
@@ -222,7 +246,7 @@ def test_gasket_counts_rise_between_families_only_where_every_integer_grid_does(
     # The issue: with sides 2**(k/4) the gasket's count rose from side 2
     # (19683) to 2.38 (about 20700), and within every octave. Whole sides keep
     # each family exact (3**(10-k) at 2**k, checked above) and never rising.
-    scales, counts = box_counts(gasket(10))
+    scales, counts = box_counts(pascal_gasket(10))
     count = dict(zip(scales.astype(int).tolist(), counts.tolist()))
     assert (count[2], count[3], count[4]) == (19683, 15243, 6561)
     # Between families the counts still rise on this set, which is tuned to
@@ -232,7 +256,7 @@ def test_gasket_counts_rise_between_families_only_where_every_integer_grid_does(
     # any side look best). At sides 5 and 10 it is the set's doing, not the
     # placement's: no grid at any integer offset does better.
     assert (count[5], count[10]) == (7046, 2348)
-    points = gasket(10)
+    points = pascal_gasket(10)
     for side in (5, 10):
         boxes = [(points + (a, b)) // side for a in range(side) for b in range(side)]
         every = [len(np.unique(x * 4096 + y)) for x, y in (box.T for box in boxes)]
@@ -304,9 +328,16 @@ def test_default_scales_are_families_of_whole_sides_from_one_to_the_extent():
     np.testing.assert_array_equal(counts, [2, 1, 1])
 
 
+@pytest.mark.parametrize("measure_of", [box_counts, radius_of_gyration, max_radius,
+                                        lambda points: measure.anisotropy(points, [1])])
+@pytest.mark.parametrize("points, why", [(np.zeros((5, 4)), "got shape"), (np.zeros((0, 2)), "got shape"),
+                                          (np.zeros(5), "got shape"), ([[0.0, 1.0], [np.nan, 0.0]], "finite")])
+def test_every_measure_refuses_bad_points_alike(measure_of, points, why):
+    with pytest.raises(ValueError, match=f"^points: .*{why}"):
+        measure_of(points)
+
+
 def test_bad_input_is_refused():
-    with pytest.raises(ValueError, match="points"):
-        box_counts(np.zeros((5, 4)))
     with pytest.raises(ValueError, match="scales"):
         box_counts(np.zeros((5, 2)), scales=[0.5, 1])
     with pytest.raises(ValueError, match="scales"):  # whole sides only
@@ -409,7 +440,7 @@ def test_every_prefix_counted_at_once_equals_box_counts_of_that_prefix(dim, latt
     for points in sets:
         ends = some_prefixes(len(points), rng)
         for scales in (None, default_scales(len(points) + 2)):
-            got_scales, got = measure.prefix_box_counts(points, ends, lattice=lattice, scales=scales)
+            got_scales, got = boxes.prefix_box_counts(points, ends, lattice=lattice, scales=scales)
             np.testing.assert_array_equal(got_scales, box_counts(points, scales=scales)[0] if scales is None
                                           else scales)
             np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, got_scales))
@@ -420,28 +451,28 @@ def test_every_prefix_counted_at_once_equals_box_counts_of_that_prefix(dim, latt
 @pytest.mark.parametrize("dim", [2, 3])
 def test_every_prefix_at_once_takes_the_routes_box_counts_takes(monkeypatch, dim, lattice, cap):
     # Small caps send sides to the particles, a few grids at a time, or (0)
-    # back to box_counts, which sorts their boxes; strips of sites are tried
+    # to sorting their boxes; strips of sites are tried
     # with and without their cost rule.
     points = random_set(dim, True, 1500 if dim == 2 else 400, 100 if dim == 2 else 20, 5)
     if not lattice:
         points = points + np.random.default_rng(6).random(points.shape)
     ends = some_prefixes(len(points), np.random.default_rng(7))
-    monkeypatch.setattr(measure, "_BITMAP_CAP", cap)
+    monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
     for strips in (2, 0):
-        monkeypatch.setattr(measure, "_STRIP_WORDS_PER_SITE", strips)
-        scales, got = measure.prefix_box_counts(points, ends, lattice=lattice)
+        monkeypatch.setattr(boxes, "_STRIP_WORDS_PER_SITE", strips)
+        scales, got = boxes.prefix_box_counts(points, ends, lattice=lattice)
         np.testing.assert_array_equal(got, prefixes_one_by_one(points, ends, lattice, scales))
 
 
 def test_prefix_box_counts_refuses_bad_input():
     with pytest.raises(ValueError, match="ends"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [0, 3])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [0, 3])
     with pytest.raises(ValueError, match="ends"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [4])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [4])
     with pytest.raises(ValueError, match="scales"):
-        measure.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
+        boxes.prefix_box_counts(np.zeros((3, 2)), [3], scales=[1, 2.5])
     with pytest.raises(ValueError, match="points"):
-        measure.prefix_box_counts(np.zeros((3, 4)), [3])
+        boxes.prefix_box_counts(np.zeros((3, 4)), [3])
 
 
 @pytest.mark.parametrize("lattice", [True, False])
@@ -463,7 +494,7 @@ def test_cluster_measures_equal_the_functions_they_gather(dim, lattice):
         scales = default_scales(min(np.ptp(points, axis=0).max() + 2, 3000))
         got = measure.cluster_measures(points, ends, history, lattice=lattice, scales=scales)
         rg = radius_of_gyration(points)
-        np.testing.assert_array_equal(got["box_count"], measure.prefix_box_counts(points, ends, lattice, scales)[1])
+        np.testing.assert_array_equal(got["box_count"], boxes.prefix_box_counts(points, ends, lattice, scales)[1])
         np.testing.assert_array_equal(got["radius_gyration"], rg[ends - 1])
         np.testing.assert_array_equal(got["radius_gyration_history"],
                                       np.where(history <= n, rg[np.minimum(history, n) - 1], np.nan))
@@ -479,4 +510,4 @@ def test_particles_are_put_in_first_axis_order_only_where_their_bitmaps_outgrow_
     # 92 x 2 words of 8 bytes, or 2048 x 18; a 3D set of 64 x 64 rows of 1 word, or 201 x 201 of 4 words;
     # a first axis longer than the sort's table allows (and than the set's size) is never sorted.
     points = np.zeros((1000, len(high)))
-    assert measure._ordered(points, np.array(high, float)) is ordered
+    assert boxes._ordered(points, np.array(high, float)) is ordered

@@ -1,12 +1,11 @@
 """One invariant suite over every model and variant of ``dla.grow``."""
 
 import importlib
-import itertools
 import time
 
+import naive
 import numpy as np
 import pytest
-from scipy.spatial import cKDTree
 
 import dlasweep as dla
 from dlasweep.params import DEFAULTS
@@ -43,79 +42,17 @@ CASES = {
 STEPPED = {"off-step"}  # fixed Gaussian steps: contact is approximate by design
 
 
-def _lattice_contacts(dim, moore):
-    for d in itertools.product((-1, 0, 1), repeat=dim):
-        a = np.abs(d)
-        if (a.max() == 1) if moore else (a.sum() == 1):
-            yield np.array(d)
-
-
-def seed_count(params):
-    """Particles placed before growth starts."""
-    return {"point": 1, "block": 2 ** params["dim"], "line": 0}[params["seed_shape"]]
-
-
-def assert_lattice_connected(points, params):
-    """Every particle is a neighbour of an earlier one (or of the substrate)."""
-    dim = params["dim"]
-    line = params["seed_shape"] == "line"
-    period = params["size"]
-    seeds = seed_count(params)
-    contacts = list(_lattice_contacts(dim, params["neighbours"] == 3**dim - 1))
-    index = {}
-    for i, p in enumerate(map(tuple, points)):
-        assert p not in index, f"site {p} used twice (particles {index.get(p)} and {i})"
-        if line:
-            assert all(0 <= c < period for c in p[:-1]) and p[-1] >= 0
-        if i >= seeds and not (line and p[-1] == 0):
-            touching = False
-            for d in contacts:
-                q = np.array(p) + d
-                if line:
-                    q[:-1] %= period
-                if tuple(q) in index:
-                    touching = True
-                    break
-            assert touching, f"particle {i} at {p} touches no earlier particle"
-        index[p] = i
-
-
-def _periodic_tree(points, params):
-    if params["seed_shape"] == "line":
-        box = np.full(params["dim"], np.inf)
-        box[:-1] = params["size"]
-        shifted = points.copy()
-        shifted[:, -1] -= points[:, -1].min()  # cKDTree wants coordinates in [0, box)
-        return cKDTree(shifted, boxsize=np.where(np.isinf(box), shifted[:, -1].max() + 10, box)), shifted
-    return cKDTree(points), points
-
-
-def assert_offlattice_contacts(points, params, exact):
-    """No overlaps; each particle rests on an earlier one at distance 1."""
-    tree, pts = _periodic_tree(points, params)
-    seeds = seed_count(params)
-    dist, _ = tree.query(pts, k=2)
-    assert dist[:, 1].min() >= 1 - 1e-9, f"overlap: closest pair at {dist[:, 1].min()}"
-    if not exact:
-        return
-    for i in range(seeds, len(pts)):
-        if params["seed_shape"] == "line" and abs(points[i, -1]) < 1e-9:
-            continue
-        near = tree.query_ball_point(pts[i], 1 + 1e-9)
-        assert any(j < i for j in near), f"particle {i} touches no earlier particle"
-
-
 def check_invariants(c):
     assert c.points.shape == (c.n, c.params["dim"])
     assert c.steps.shape == (c.n,) and (c.steps >= 0).all()
     # particles beyond the seed were carried there by walks, and the walks are counted
-    assert c.n <= seed_count(c.params) or c.steps.sum() > 0
+    assert c.n <= naive.seed_count(c.params) or c.steps.sum() > 0
     if c.params["model"] == "lattice":
         assert c.points.dtype.kind == "i"
-        assert_lattice_connected(c.points, c.params)
+        naive.assert_lattice_connected(c.points, c.params)
     else:
         assert c.points.dtype.kind == "f"
-        assert_offlattice_contacts(c.points, c.params, exact=c.params["step"] == 0)
+        naive.assert_offlattice_contacts(c.points, c.params, exact=c.params["step"] == 0)
 
 
 @pytest.fixture(scope="module", params=sorted(CASES))

@@ -11,9 +11,12 @@ import pytest
 import xarray as xr
 
 import dlasweep as dla
-from dlasweep.measure import anisotropy, box_counts, default_scales, max_radius, radius_of_gyration
+from conftest import colours_shown
+from dlasweep.boxes import box_counts, default_scales
+from dlasweep.measure import anisotropy, max_radius, radius_of_gyration
 from dlasweep import store
-from dlasweep.analysis import MIN_CI_SEEDS, Readout
+from dlasweep.config import MIN_CI_SEEDS
+from dlasweep.readout import Readout
 from dlasweep.params import STATUSES
 from dlasweep.report import report
 
@@ -141,13 +144,16 @@ def test_draw_cluster_writes_a_picture(tmp_path, suffix):
 
     c = dla.grow(300, seed=1)
     path = draw_cluster(c.points, c.params, tmp_path / f"cluster{suffix}")
-    head = path.read_bytes()[:200]
-    assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head
+    # Each site a block of as many pixels, coloured by attachment order (viridis: a colour may be two sites').
+    shown = colours_shown(path)
+    site = min(shown.values())
+    assert all(count % site == 0 for count in shown.values())
+    assert sum(shown.values()) == 300 * site and len(shown) > 200
 
 
 def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
     from dlasweep.bench import _to_dataset
-    from dlasweep.report import plot_bench
+    from dlasweep.bench_plot import plot_bench
 
     runs = [("lattice-2d", "exact", n, 1e-6 * n**1.1) for n in (1_000, 10_000, 100_000)]
     runs += [("offlattice-2d", "exact", n, 2e-6 * n) for n in (1_000, 10_000)]
@@ -157,7 +163,9 @@ def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
     ds.attrs["cost_exponent_lattice_2d"] = 1.1
     path = plot_bench(ds, tmp_path / "bench")
     assert path == tmp_path / "bench" / "bench.png"
-    assert path.read_bytes().startswith(b"\x89PNG")
+    # A line per model, in the report's first two colours (tab10 C0, C1); the naive run beside lattice-2d's.
+    shown = colours_shown(path)
+    assert shown.get((31, 119, 180), 0) > 500 and shown.get((255, 127, 14), 0) > 500, sorted(shown.items())[:5]
 
 
 THIRTY = """
@@ -187,7 +195,7 @@ def drawn(monkeypatch, plot, ds, tmp_path, caption=False):
 
     module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
     figures = []
-    monkeypatch.setattr(module, "_save", lambda fig, path: figures.append(fig) or fig.savefig(path))
+    monkeypatch.setattr(module, "save_figure", lambda fig, path: figures.append(fig) or fig.savefig(path))
     said = plot(Readout(ds), tmp_path / "plot.png")
     assert said and (tmp_path / "plot.png").stat().st_size > 0
     (fig,) = figures

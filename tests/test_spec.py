@@ -37,8 +37,11 @@ def test_quick_workflow_matches_the_issue():
 
 
 def test_every_workflow_spec_is_valid():
-    for path in (ROOT / "workflows").glob("*.toml"):
-        load_spec(path)
+    paths = sorted((ROOT / "workflows").glob("*.toml"))
+    assert {"quick.toml", "tradeoff.toml"} <= {path.name for path in paths}, paths
+    for path in paths:
+        spec = load_spec(path)
+        assert spec.n_tasks > 0 and spec.name, path
 
 
 @pytest.mark.parametrize("change, key", [

@@ -273,7 +273,7 @@ def test_bench_files_are_cf_clean_and_info_describes_them(cf_tables, cfchecks, t
     assert lines[4].split() == ["lattice-2d", "500,", "2000", "2000", "0.002", "120", "1.00"]
     assert lines[-1] == "naive walk / exact jumps, time: N=500 4.0x"
     with netCDF4.Dataset(path) as nc:
-        assert nc["peak_memory"].units == store.MIB and nc["peak_memory"][:].tolist() == [120.5] * 6
+        assert nc["peak_memory"].units == bench.MIB and nc["peak_memory"][:].tolist() == [120.5] * 6
     with pytest.raises(store.StoreError, match="not a dlasweep dataset .missing cluster_particles"):
         store.open_sweep(path)  # nor does report take it
 

@@ -9,9 +9,9 @@ from conftest import TINY_SPEC
 from test_sweep import Interrupt, batches_of, interrupt_after
 
 import dlasweep as dla
-from dlasweep import branching, store, sweep
-from dlasweep.analysis import growth_counts
-from dlasweep.fit import fit_mass_radius
+from dlasweep import branching, store
+from dlasweep.fit import fit_mass_radius, growth_counts
+from dlasweep.parts import Parts, ResumeError
 from dlasweep.measure import radius_of_gyration
 from dlasweep.report import report
 from dlasweep.spec import parse_spec
@@ -82,7 +82,7 @@ def test_unstored_clusters_leave_no_positions_in_the_parts(dask_client, tmp_path
     monkeypatch.setattr(store.ParticleWriter, "finish", killed)  # every cluster finished, the file not written
     with pytest.raises(Interrupt):
         dla.run_sweep(spec_storing(1), client=dask_client, out=out)
-    parts = sweep.Parts(Path(f"{out}.parts"))
+    parts = Parts(Path(f"{out}.parts"))
     keys = list(parts.where)
     for key, result in zip(keys, parts.results(keys, ("points.shape", "diffusion_time.shape"))):
         stored = key.endswith("-0")  # replicate 0
@@ -98,7 +98,7 @@ def test_a_killed_run_resumes_to_the_uninterrupted_file(dask_client, tmp_path, m
     with pytest.raises(Interrupt):
         dla.run_sweep(spec, client=dask_client, out=out)
     monkeypatch.undo()
-    with pytest.raises(sweep.ResumeError, match=r"run.store_clusters: 2 -> 1"):
+    with pytest.raises(ResumeError, match=r"run.store_clusters: 2 -> 1"):
         dla.run_sweep(spec_storing(1), client=dask_client, out=out, resume=True)
     resumed = dla.run_sweep(spec, client=dask_client, out=out, resume=True)
     science = [name for name in whole.variables if name != "wall_time"]

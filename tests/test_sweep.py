@@ -24,7 +24,9 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, files_under, science
-from dlasweep import measure, progress, store, sweep
+from dlasweep import boxes, measure, progress, store, sweep
+from dlasweep import task as worker
+from dlasweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
 from dlasweep.spec import parse_spec
 
 
@@ -52,7 +54,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
             assert int(at["walk_steps"]) == cluster.steps[:m].sum()
             assert float(at["radius_gyration"]) == measure.radius_of_gyration(cluster.points)[m - 1]
             np.testing.assert_equal(float(at["anisotropy"]), measure.anisotropy(cluster.points, [m])[0])
-            _, counts = measure.box_counts(cluster.points[:m], scales=reference["scale"].values)
+            _, counts = boxes.box_counts(cluster.points[:m], scales=reference["scale"].values)
             np.testing.assert_array_equal(at["box_count"].values, counts)
             ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
             assert ok == (m == n) and (ok or cluster.status != "ok")
@@ -79,7 +81,7 @@ class Interrupt(BaseException):
 def interrupt_after(monkeypatch, n_clusters):
     """Make the process die at the first part that would bring the saved clusters past n, as a kill would."""
     written = []
-    real_write = sweep.Parts.write
+    real_write = Parts.write
 
     def write(self, results):
         if len(written) + len(results) > n_clusters:
@@ -87,22 +89,22 @@ def interrupt_after(monkeypatch, n_clusters):
         real_write(self, results)
         written.extend(results)
 
-    monkeypatch.setattr(sweep.Parts, "write", write)
+    monkeypatch.setattr(Parts, "write", write)
     return written
 
 
 def record_writes(monkeypatch):
     """The keys of the clusters saved, in order."""
     written = []
-    real_write = sweep.Parts.write
-    monkeypatch.setattr(sweep.Parts, "write",
+    real_write = Parts.write
+    monkeypatch.setattr(Parts, "write",
                         lambda self, results: (written.extend(results), real_write(self, results)))
     return written
 
 
 def finished_clusters(out):
     """The keys of the clusters finished in the parts of ``out``."""
-    parts = sweep.Parts(Path(f"{out}.parts"))
+    parts = Parts(Path(f"{out}.parts"))
     return [key for key in parts.where if parts.finished(key)]
 
 
@@ -135,8 +137,8 @@ def test_batches_shrink_near_the_end_so_that_the_threads_finish_together():
 
 def test_batches_give_the_same_results(reference, dask_client, monkeypatch):
     parts = []
-    real_write = sweep.Parts.write
-    monkeypatch.setattr(sweep.Parts, "write",
+    real_write = Parts.write
+    monkeypatch.setattr(Parts, "write",
                         lambda self, results: (parts.append(len(results)), real_write(self, results)))
     batches_of(monkeypatch, 5)
     ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client)
@@ -155,7 +157,7 @@ def test_resume_computes_only_what_is_missing(before, after, tmp_path, dask_clie
     assert not out.exists() and sorted(finished_clusters(out)) == sorted(first)
     assert len(first) == 5 - 5 % before
     monkeypatch.undo()
-    with pytest.raises(sweep.ResumeError, match="--resume"):
+    with pytest.raises(ResumeError, match="--resume"):
         dla.run_sweep(spec, client=dask_client, out=out)
     batches_of(monkeypatch, after)
     second = record_writes(monkeypatch)
@@ -173,7 +175,7 @@ def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
         dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
     monkeypatch.undo()
     changed = parse_spec(TINY_SPEC.replace("[20, 60, 150]", "[20, 60, 100]"))
-    with pytest.raises(sweep.ResumeError, match=r"grid.n_particles: \[20, 60, 150\] -> \[20, 60, 100\]"):
+    with pytest.raises(ResumeError, match=r"grid.n_particles: \[20, 60, 150\] -> \[20, 60, 100\]"):
         dla.run_sweep(changed, client=dask_client, out=out, resume=True)
     assert len(finished_clusters(out)) == 2
 
@@ -219,26 +221,26 @@ def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, m
 
 def test_the_embedded_cluster_shortens_the_switch_interval_and_restores_it(monkeypatch):
     before, during = sys.getswitchinterval(), []
-    growth_counts = sweep.growth_counts
+    growth_counts = worker.growth_counts
 
     def counted(counts):  # called by each task, in the worker's thread (a module global: not pickled)
         during.append(sys.getswitchinterval())
         return growth_counts(counts)
 
-    monkeypatch.setattr(sweep, "growth_counts", counted)
+    monkeypatch.setattr(worker, "growth_counts", counted)
     dla.run_sweep(parse_spec("[grid]\nn_particles = [5]\nseeds = 2\n"), workers=1)
     assert sweep.SWITCH_INTERVAL in during and sys.getswitchinterval() == before != sweep.SWITCH_INTERVAL
 
 
 def test_the_embedded_cluster_has_its_kernels_loaded_before_the_first_task(monkeypatch):
     threads = []
-    growth_counts = sweep.growth_counts
+    growth_counts = worker.growth_counts
 
     def recorded(counts):  # called once by each batch of tasks (a module global: not pickled)
         threads.append(threading.current_thread().name)
         return growth_counts(counts)
 
-    monkeypatch.setattr(sweep, "growth_counts", recorded)
+    monkeypatch.setattr(worker, "growth_counts", recorded)
     ds = dla.run_sweep(parse_spec("[grid]\nn_particles = [5, 50]\nseeds = 3\n"), workers=1)
     assert threads[0] == "dlasweep-load" and "dlasweep-load" not in threads[1:] and len(threads) > 1
     assert (ds["n_grown"].values == [[5] * 3, [50] * 3]).all()
@@ -249,7 +251,7 @@ def test_submission_is_batched(dask_client, monkeypatch):
     spec = parse_spec("[grid]\nn_particles = [1]\nseeds = 250\n")
     batches_of(monkeypatch, 1)
     in_flight, peak = [0], [0]
-    real_submit, real_write = dask_client.submit, sweep.Parts.write
+    real_submit, real_write = dask_client.submit, Parts.write
 
     def submit(*args, **kwargs):
         in_flight[0] += 1
@@ -261,7 +263,7 @@ def test_submission_is_batched(dask_client, monkeypatch):
         real_write(self, results)
 
     monkeypatch.setattr(dask_client, "submit", submit)
-    monkeypatch.setattr(sweep.Parts, "write", write)
+    monkeypatch.setattr(Parts, "write", write)
     ds = dla.run_sweep(spec, client=dask_client)
     assert peak[0] == 100 and ds.sizes["cluster"] == 250 and (ds["n_grown"] == 1).all()
 
@@ -291,14 +293,14 @@ def test_an_unreachable_scheduler_leaves_nothing(tmp_path):
 def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, write_spec, tmp_path, dask_cluster,
                                                                       reference, monkeypatch):
     out, address = tmp_path / "tiny.nc", dask_cluster.scheduler_address
-    real_write = sweep.Parts.write
+    real_write = Parts.write
 
     def write(self, results):
         if len(finished_clusters(out)) == 5:
             raise OSError(errno.ENOSPC, "No space left on device")
         real_write(self, results)
 
-    monkeypatch.setattr(sweep.Parts, "write", write)
+    monkeypatch.setattr(Parts, "write", write)
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--scheduler", address)
     assert status == 1 and err.strip().splitlines()[1:] == [  # after the plan
         "dlasweep sweep: failed: OSError: [Errno 28] No space left on device"]
@@ -326,14 +328,14 @@ def test_a_part_cut_short_by_a_full_disk_leaves_no_temporary_file(tmp_path, dask
         dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
     parts = Path(f"{out}.parts")
     assert len(finished_clusters(out)) == 5
-    assert sorted(p.name for p in parts.iterdir() if p.name not in (sweep.MANIFEST, sweep.LOCK)
+    assert sorted(p.name for p in parts.iterdir() if p.name not in (MANIFEST, LOCK)
                   and not p.name.startswith("part-")) == []
 
 
 @contextlib.contextmanager
 def locked_by_another_process(folder):
     """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""
-    code = "import sys, pathlib, dlasweep.sweep as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
+    code = "import sys, pathlib, dlasweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
     holder = subprocess.Popen([sys.executable, "-c", code, str(folder)], stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE)
     try:
@@ -371,11 +373,11 @@ def test_the_lock_of_a_killed_run_is_taken_over(interrupted, dask_client, refere
     parts = Path(f"{interrupted}.parts")
     with locked_by_another_process(parts):
         pass  # killed: its lock file stays, naming it
-    assert (parts / sweep.LOCK).exists()
+    assert (parts / LOCK).exists()
     holders = []
-    real_write = sweep.Parts.write
-    monkeypatch.setattr(sweep.Parts, "write", lambda self, results: (
-        holders.append((parts / sweep.LOCK).read_text()), real_write(self, results)))
+    real_write = Parts.write
+    monkeypatch.setattr(Parts, "write", lambda self, results: (
+        holders.append((parts / LOCK).read_text()), real_write(self, results)))
     resumed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=interrupted, resume=True)
     assert len(holders) == 7 and set(holders) == {f"process {os.getpid()} on {socket.gethostname()}"}
     xr.testing.assert_identical(science(resumed), science(reference))
@@ -390,13 +392,13 @@ def test_the_lock_is_held_for_every_batch_and_the_final_file(tmp_path, dask_clie
 
     def check(real):
         def checked(*args):
-            with pytest.raises(sweep.ResumeError, match=f"in use by process {os.getpid()} "):
-                sweep._lock(parts)
+            with pytest.raises(ResumeError, match=f"in use by process {os.getpid()} "):
+                _lock(parts)
             held.append(real.__name__)
             return real(*args)
         return checked
 
-    monkeypatch.setattr(sweep.Parts, "write", check(sweep.Parts.write))
+    monkeypatch.setattr(Parts, "write", check(Parts.write))
     monkeypatch.setattr(store.ParticleWriter, "finish", check(store.ParticleWriter.finish))
     dla.run_sweep(spec, client=dask_client, out=out).close()
     assert held == ["write"] * 24 + ["finish"]
@@ -524,18 +526,18 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
     # Results read back from what the run kept (none, the first part, all three) equal those read from disk.
     spec = parse_spec(TINY_SPEC)
     tasks = list(spec.tasks())
-    counts, scales = np.asarray(spec.counts), sweep.sweep_scales(spec)
-    parts = sweep.Parts(tmp_path)
-    monkeypatch.setattr(sweep.Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
+    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
+    parts = Parts(tmp_path)
+    monkeypatch.setattr(Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
     for batch in (tasks[:3], tasks[3:4], tasks[4:]):
-        parts.write({t.key: r for t, r in zip(batch, sweep.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
+        parts.write({t.key: r for t, r in zip(batch, worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
         if kept == 1:  # both budgets spent
-            parts._kept_bytes = dict.fromkeys(parts._kept_bytes, sweep.Parts.KEEP_BYTES)
+            parts._kept_bytes = dict.fromkeys(parts._kept_bytes, Parts.KEEP_BYTES)
     assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())
     keys = [t.key for t in tasks][::-1]
     for names, release in ((("box_count", "radius_gyration_history", "status", "points.shape", "error"), False),
                            (("points", "diffusion_time"), True), (("points", "diffusion_time"), False)):
-        from_disk = list(sweep.Parts(tmp_path).results(keys, names))
+        from_disk = list(Parts(tmp_path).results(keys, names))
         for a, b in zip(parts.results(keys, names, release=release), from_disk, strict=True):
             assert a.keys() == b.keys()
             for name in a:
@@ -549,16 +551,16 @@ def test_parts_table_stacks_what_results_gives(tmp_path):
     # a failed result (its message longer than the first part's) replaced by a finished one in a later part.
     spec = parse_spec(TINY_SPEC)
     tasks = list(spec.tasks())
-    counts, scales = np.asarray(spec.counts), sweep.sweep_scales(spec)
-    parts = sweep.Parts(tmp_path)
-    measured = dict(zip((t.key for t in tasks), sweep.measure_tasks(tasks, counts, scales, 1, [True] * len(tasks))))
-    failed = sweep.error_result(counts, len(scales), 2, "ValueError: " + "a long message " * 10)
+    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
+    parts = Parts(tmp_path)
+    measured = dict(zip((t.key for t in tasks), worker.measure_tasks(tasks, counts, scales, 1, [True] * len(tasks))))
+    failed = worker.error_result(counts, len(scales), 2, "ValueError: " + "a long message " * 10)
     parts.write({t.key: measured[t.key] for t in tasks[:2]})
     parts.write({tasks[2].key: failed, tasks[3].key: failed, **{t.key: measured[t.key] for t in tasks[4:]}})
     parts.write({tasks[3].key: measured[tasks[3].key]})
     names = ("box_count", "radius_gyration_history", "status", "wall_time", "points.shape", "error")
     # Kept in memory and from the files; the first part read has only empty messages, or the long one.
-    for reader, keys in ((parts, [t.key for t in tasks]), (sweep.Parts(tmp_path), [t.key for t in tasks][::-1])):
+    for reader, keys in ((parts, [t.key for t in tasks]), (Parts(tmp_path), [t.key for t in tasks][::-1])):
         table = reader.table(keys, names)
         for i, result in enumerate(reader.results(keys, names)):
             for name in names:
@@ -571,7 +573,7 @@ def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, mo
     # gc.freeze() and a higher young threshold while the tasks run (the objects of the imports and the
     # cluster's start are not scanned in each full collection); as before when the sweep ends, also when it
     # fails (a full disk).
-    frozen, grow_many, thresholds = [], sweep.grow_many, gc.get_threshold()
+    frozen, grow_many, thresholds = [], worker.grow_many, gc.get_threshold()
 
     def watched(*args, **kwargs):
         frozen.append((gc.get_freeze_count(), gc.get_threshold()[0]))
@@ -580,9 +582,9 @@ def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, mo
     def full(self, results):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(sweep, "grow_many", watched)
+    monkeypatch.setattr(worker, "grow_many", watched)
     if fails:
-        monkeypatch.setattr(sweep.Parts, "write", full)
+        monkeypatch.setattr(Parts, "write", full)
     with pytest.raises(OSError) if fails else contextlib.nullcontext():
         dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
     # A failed sweep's tasks may still run on a shared cluster after it returns: its first batch ran frozen.
