@@ -4,7 +4,8 @@ import itertools
 
 import numpy as np
 import pytest
-from test_models import CASES, seed_count
+from naive import seed_count
+from test_models import CASES
 
 import dlasweep as dla
 from dlasweep.grow import grow_many
