@@ -28,27 +28,27 @@ def _ratio(sweep, config, name="bifurcation_ratio") -> str:
 
 def branching_figure(sweep, path):
     """Mean branch counts per order, log scale, each configuration with its fitted ratio; None without parents."""
-    from .report import _colour, _figure, _save  # here: report imports this module
+    from .report import colour_of, new_figure, save_figure  # here: report imports this module
 
     shown = _shown(sweep)
     if not shown:
         return None
-    fig, (ax,) = _figure(1, 6.5, 4.2)
+    fig, (ax,) = new_figure(1, 6.5, 4.2)
     orders = sweep.s["order"].values
     for i, config in enumerate(shown):
         counts = sweep.at("branch_count", config)
         keep = np.isfinite(counts) & (counts > 0)
         ratio = float(sweep.at("bifurcation_ratio", config))
-        ax.semilogy(orders[keep], counts[keep], "o", color=_colour(i),
+        ax.semilogy(orders[keep], counts[keep], "o", color=colour_of(i),
                     label=f"{sweep.label(config)}: R_b = {_ratio(sweep, config)}, "
                           f"{int(sweep.at('branch_clusters', config))} clusters")
-        ax.semilogy(orders[keep], ratio_line(counts[keep], ratio), "-", color=_colour(i), lw=1)
+        ax.semilogy(orders[keep], ratio_line(counts[keep], ratio), "-", color=colour_of(i), lw=1)
     ax.set_xlabel("Horton-Strahler order k")
     ax.set_ylabel("branches of order k, mean over clusters")
     ax.set_xticks(orders)
     ax.legend(fontsize=7)
     ax.set_title(f"Branching of the stored clusters at N={sweep.counts[-1]}", fontsize=9)
-    _save(fig, path)
+    save_figure(fig, path)
     literature = LITERATURE.get(sweep.dim)
     return ("Branches of each Horton-Strahler order (points: mean over the stored clusters) and the line "
             "falling by the bifurcation ratio R_b an order (R_b: mean over clusters of each one's fit over "

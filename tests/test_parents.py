@@ -70,11 +70,18 @@ def test_every_parent_touches_its_child(grown):
         np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1.0, atol=1e-9)
 
 
-def test_lattice_parent_is_the_earliest_neighbour(grown):
-    """The rule: of the occupied neighbours at attachment, the earliest; the substrate before any."""
+def test_parent_follows_its_models_rule(grown):
+    """On the lattice, of the occupied neighbours at attachment the earliest
+    (the substrate before any); off it, the disk touched, which is the
+    nearest earlier one (nothing overlaps)."""
     name, c = grown
-    if c.params["model"] != "lattice":
-        pytest.skip("lattice rule")
+    if c.params["model"] == "lattice":
+        _lattice_rule(name, c)
+    else:
+        _offlattice_rule(name, c)
+
+
+def _lattice_rule(name, c):
     dim, period = c.params["dim"], c.params["size"]
     moves = unit_moves(dim, c.params["neighbours"] != 2 * dim)[:, :dim]
     index = {}
@@ -92,11 +99,7 @@ def test_lattice_parent_is_the_earliest_neighbour(grown):
         index[site] = i
 
 
-def test_offlattice_parent_is_the_nearest_earlier_particle(grown):
-    """Off the lattice the disk touched is the nearest earlier one (nothing overlaps)."""
-    name, c = grown
-    if c.params["model"] == "lattice":
-        pytest.skip("off-lattice rule")
+def _offlattice_rule(name, c):
     for i in np.flatnonzero(c.parents >= 0)[::7]:
         d = c.points[:i] - c.points[i]
         if c.params["seed_shape"] == "line":
