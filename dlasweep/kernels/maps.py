@@ -136,16 +136,22 @@ def layout(dim, width, most=64):
 
 
 @jit
+def tiled(dim, bits, side, i, j, k):
+    """Position of cell (i, j, k) of a grid of ``side`` cells a side stored in
+    square (cubic) tiles of ``2**bits`` cells a side, tile after tile."""
+    last = (1 << bits) - 1
+    tiles = (side + last) >> bits
+    tile = (i >> bits) + tiles * ((j >> bits) + (tiles * (k >> bits) if dim == 3 else 0))
+    inner = (i & last) | ((j & last) << bits)
+    if dim == 3:
+        inner |= (k & last) << (2 * bits)
+    return (tile << (dim * bits)) + inner
+
+
+@jit
 def block_word(dim, base, nb, bx, by, bz):
     """The word holding block (bx, by, bz) of a segment starting at ``base``, ``nb`` blocks a side."""
-    t = TILE_BITS[dim]
-    last = (1 << t) - 1
-    tiles = (nb + last) >> t
-    tile = (bx >> t) + tiles * ((by >> t) + (tiles * (bz >> t) if dim == 3 else 0))
-    inner = (bx & last) | ((by & last) << t)
-    if dim == 3:
-        inner |= (bz & last) << (2 * t)
-    return base + (tile << (dim * t)) + inner
+    return base + tiled(dim, TILE_BITS[dim], nb, bx, by, bz)
 
 
 @jit
@@ -208,14 +214,7 @@ cluster share pages and the rest are never written."""
 @jit
 def field_cell(dim, fw, ci, cj, ck):
     """Index of cell (ci, cj, ck) in a field of ``fw`` cells a side, stored by tiles."""
-    t = FIELD_TILE[dim]
-    last = (1 << t) - 1
-    tiles = (fw + last) >> t
-    tile = (ci >> t) + tiles * ((cj >> t) + (tiles * (ck >> t) if dim == 3 else 0))
-    inner = (ci & last) | ((cj & last) << t)
-    if dim == 3:
-        inner |= (ck & last) << (2 * t)
-    return (tile << (dim * t)) + inner
+    return tiled(dim, FIELD_TILE[dim], fw, ci, cj, ck)
 
 
 @jit
