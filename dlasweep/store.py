@@ -71,6 +71,7 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
+from .kernels.model import STEPS_DTYPE
 from .selection import selected_clusters
 
 STATUS_FLAGS = _params.STATUSES
@@ -144,7 +145,8 @@ SCHEMA = {
     "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
     **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
                    {"axis": a.upper()}) for a in AXES},
-    "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
+    "diffusion_time": Variable(("particle",), STEPS_DTYPE, "1",
+                               "walk steps (or exact jumps) from release to sticking; 4294967295: at least that many"),
     "parent": Variable(("particle",), np.int32, "1",
                        "position in its cluster (0 = first) of the particle this one stuck to; "
                        "-1 = none: a seed particle, or one that stuck to the substrate",
@@ -276,7 +278,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
         "cluster_particles": ("cluster", np.asarray([len(points)])),
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
         **{a: ("particle", _positions(points[:, k])) for k, a in enumerate(AXES[: points.shape[1]])},
-        "diffusion_time": ("particle", np.asarray(cluster.steps, np.int64)),
+        "diffusion_time": ("particle", np.asarray(cluster.steps, SCHEMA["diffusion_time"].dtype)),
         "parent": ("particle", np.asarray(cluster.parents, np.int32)),
     }
     attrs = {
@@ -326,7 +328,7 @@ def ragged_columns(models, dims) -> dict:
     z = 0 plane of 3D columns.
     """
     lattice = bool((np.asarray(models) == "lattice").all())
-    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(np.int64),
+    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(SCHEMA["diffusion_time"].dtype),
             "parent": np.dtype(SCHEMA["parent"].dtype)}
 
 
