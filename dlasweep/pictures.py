@@ -112,7 +112,7 @@ def draw_points(ax, points, lattice, inches, rasterized=True, *, view=(0, 1), pa
         Limits of every coordinate, equal spans (from ``_square``), so that
         the panels of one figure share a scale; by default the cluster's.
     """
-    points = np.asarray(points, float)
+    points = np.asarray(points) if lattice else np.asarray(points, float)  # 10^8 sites: no float copy
     n, dim = points.shape
     if frame is None:
         frame = _square(_frame(points, lattice, dim, params), lattice)
@@ -122,19 +122,18 @@ def draw_points(ax, points, lattice, inches, rasterized=True, *, view=(0, 1), pa
     ax.set_aspect("equal")
     ax.set_axis_off()
     span = frame[h, 1] - frame[h, 0]
-    keys = (np.arange(n),)  # where particles share a pixel, the last attached shows ...
-    near = None
-    if dim == 3:
-        (depth,) = set(range(3)) - {h, v}
-        towards = np.cross(np.eye(3)[h], np.eye(3)[v])[depth]  # +1: a larger depth is nearer the viewer
-        near = towards * points[:, depth]
-        near = (near - near.min()) / max(np.ptp(near), 1.0) if n else near  # 0 farthest, 1 nearest
-        keys = (keys[0], near)  # ... and in 3D the nearest
     if n and lattice:
-        _site_image(ax, points[:, [h, v]], keys, near, frame[[h, v], 0], span, round(inches * ax.figure.dpi))
+        _site_image(ax, points, view, frame[[h, v], 0], span, round(inches * ax.figure.dpi))
     elif n:
-        shown = np.lexsort(keys)  # the nearest drawn last
-        xy, colours = points[shown][:, [h, v]], _colours(shown, n, near)
+        keys = (np.arange(n),)  # the last attached drawn last ...
+        near = None
+        if dim == 3:
+            depth, towards = _depth(view)
+            near = towards * points[:, depth]
+            near = (near - near.min()) / max(np.ptp(near), 1.0)  # 0 farthest, 1 nearest
+            keys = (keys[0], near)  # ... and in 3D the nearest
+        shown = np.lexsort(keys)
+        xy, colours = points[shown][:, [h, v]], _colours(shown, n, None if near is None else near[shown])
         area = max((72 * inches / span) ** 2, 0.05)  # a unit diameter, in points squared
         areas = [area]
         if dim == 3:
@@ -151,30 +150,56 @@ def draw_points(ax, points, lattice, inches, rasterized=True, *, view=(0, 1), pa
         _draw_walls(ax, _walls(lattice, dim, params), view, frame, params["seed_shape"] == "line")
 
 
+def _depth(view):
+    """The coordinate a 3D view looks along, and +1 when a larger one is nearer the viewer (-1 else)."""
+    h, v = view
+    (depth,) = set(range(3)) - {h, v}
+    return depth, int(np.cross(np.eye(3)[h], np.eye(3)[v])[depth])
+
+
 def _colours(index, n, near):
-    """RGBA of particles ``index`` of ``n``: viridis by attachment order, faded towards white as ``near`` falls."""
+    """RGBA of particles ``index`` of ``n``: viridis by attachment order, faded towards white as ``near``
+    (theirs, 0 farthest to 1 nearest) falls."""
     from matplotlib import colormaps
 
     rgba = colormaps["viridis"](index / max(n - 1, 1))
     if near is not None:
-        rgba[:, :3] += (1.0 - rgba[:, :3]) * (_FOG * (1.0 - near[index]))[:, None]
+        rgba[:, :3] += (1.0 - rgba[:, :3]) * (_FOG * (1.0 - near))[:, None]
     return rgba
 
 
-def _site_image(ax, sites, keys, near, low, span, pixels):
+SITE_CHUNK = 1 << 22
+"""Sites placed in the image at a time: memory of a few chunks, not of 10^8 sites' float copies and sort."""
+
+
+def _site_image(ax, sites, view, low, span, pixels):
     """Occupied sites as an image of at most ``pixels`` across, a pixel per block of sites.
 
-    ``low`` are the frame's lower edges (half-integers); ``keys`` rank the
-    particles sharing a pixel (the last key first): the largest shows.
+    ``low`` are the frame's lower edges (half-integers). Of the sites
+    sharing a pixel the nearest shows (3D), and of those the last attached.
     """
+    n, dim = sites.shape
+    h, v = view
     block = max(1, math.ceil(span / pixels))
     cells = math.ceil(span / block)
-    ij = np.floor((sites - low) / block).astype(np.int64)
-    flat = ij[:, 1] * cells + ij[:, 0]
-    order = np.lexsort((*keys, flat))
-    top = order[np.r_[flat[order][1:] != flat[order][:-1], True]]
+    far, reach = 0, 1
+    if dim == 3:
+        depth, towards = _depth(view)
+        ends = towards * np.array([sites[:, depth].min(), sites[:, depth].max()], np.int64)
+        far, reach = int(ends.min()), max(int(np.ptp(ends)), 1)
+    shows = np.full(cells * cells, -1, np.int64)  # each pixel's largest rank: nearness, then attachment order
+    for start in range(0, n, SITE_CHUNK):
+        chunk = sites[start:start + SITE_CHUNK]
+        flat = ((chunk[:, v] - low[1]) // block).astype(np.int64) * cells + ((chunk[:, h] - low[0]) // block).astype(np.int64)
+        rank = np.arange(start, start + len(chunk), dtype=np.int64)
+        if dim == 3:
+            rank += (towards * chunk[:, depth].astype(np.int64) - far) * n
+        np.maximum.at(shows, flat, rank)
+    pixel = np.flatnonzero(shows >= 0)
+    top = shows[pixel] % n
+    near = (towards * sites[top, depth] - far) / reach if dim == 3 else None
     rgba = np.zeros((cells * cells, 4), np.uint8)  # transparent where no site is occupied
-    rgba[flat[top]] = np.round(_colours(top, len(sites), near) * 255)
+    rgba[pixel] = np.round(_colours(top, n, near) * 255)
     reach = cells * block
     ax.imshow(rgba.reshape(cells, cells, 4), origin="lower", interpolation="nearest",
               extent=(low[0], low[0] + reach, low[1], low[1] + reach))
@@ -299,7 +324,7 @@ def cluster_figure(points, params, *, seed=None, status=_params.Status.ok.name, 
     check_size(inches, dpi)
     p = _params.resolve(**params)
     dim, lattice = p["dim"], p["model"] == "lattice"
-    points = np.asarray(points, float)
+    points = np.asarray(points) if lattice else np.asarray(points, float)
     head, changed = describe(p, len(points), seed, status)
     font = _FONT_PER_INCH * inches
     if dim == 2:

@@ -137,3 +137,18 @@ def test_grow_draws_the_size_asked_and_svg_still_works(run_cli, tmp_path):
     status, _, err = run_cli("grow", "-n", "200", "-o", tmp_path / "l.svg")
     assert status == 0, err
     assert "<image" in (tmp_path / "l.svg").read_text()  # the lattice: its image, a pixel per site or more
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_sites_placed_a_chunk_at_a_time_show_as_placed_at_once(dim, monkeypatch, tmp_path):
+    """The lattice image is built a chunk of sites at a time (10^8 sites in bounded memory): a pixel
+    shared across chunks still shows its nearest, then last attached, site."""
+    import dlasweep.pictures as pictures
+
+    c = dla.grow(20000 if dim == 2 else 3000, seed=5, dim=dim)
+    draw_cluster(c.points, c.params, tmp_path / "whole.png", dpi=34)
+    monkeypatch.setattr(pictures, "SITE_CHUNK", 777)
+    draw_cluster(c.points, c.params, tmp_path / "chunks.png", dpi=34)
+    whole, chunks = imread(tmp_path / "whole.png"), imread(tmp_path / "chunks.png")
+    assert len(np.unique(whole.reshape(-1, whole.shape[-1]), axis=0)) > 50  # the sites' colours, many per pixel
+    np.testing.assert_array_equal(whole, chunks)
