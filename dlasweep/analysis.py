@@ -31,6 +31,7 @@ from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius
                   history_counts, mass_radius_counts, seed_interval)
 from .measure import radius_of_gyration
 from .params import EXACT_METHOD, STATUSES
+from .ragged import cluster_points
 from .selection import with_selected_clusters
 
 EXPONENTS = (0.25, 0.5, 0.75, 1.0)
@@ -143,7 +144,7 @@ SUMMARY = {
     "D_inf_reason": Summarised((), "why D_inf is not given; empty otherwise", str),
 }
 """Every variable of ``summarise``'s dataset, in its order: the one place its dims, type and
-long name are spelled (as ``store.SCHEMA`` spells the stored ones)."""
+long name are spelled (as ``schema.SCHEMA`` spells the stored ones)."""
 
 
 def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
@@ -328,8 +329,6 @@ class _Sweep:
         i = self.clusters.get((config, seed))
         if i is None or self.ds["cluster_particles"].values[i] < 1:
             return None
-        from .store import cluster_points  # here, so that the analysis of a curve needs no netCDF
-
         return cluster_points(self.ds, i).astype(np.float64)
 
     def times(self, config, seed):

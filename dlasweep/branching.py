@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .fit import ensemble
+from .ragged import cluster_parents
 from .tree import MIN_BRANCHES, branching
 
 ATTRS = {
@@ -48,8 +49,6 @@ def summary(ds, config_dims, clusters, min_seeds) -> xr.Dataset:
     """
     if "parent" not in ds.variables or not clusters:
         return xr.Dataset()
-    from .store import cluster_parents  # here, so that the statistics of a tree need no netCDF
-
     shape = tuple(ds.sizes[d] for d in config_dims)
     n_seeds = ds.sizes["seed"]
     ratio = np.full((*shape, n_seeds), np.nan)

@@ -24,7 +24,7 @@ from pathlib import Path
 from . import export as _export
 from . import params as _params
 from . import plan as _plan
-from . import info, slurm, store
+from . import info, ragged, slurm, store
 from ._version import __version__
 from .grow import compiled, grow
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
@@ -236,7 +236,7 @@ def _export_cluster(args) -> int:
         if not 0 <= args.cluster < count:
             raise UsageError(f"--cluster: {args.cluster} is not in [0, {count - 1}]" if count else
                              f"--cluster: {args.dataset} stores no cluster")
-        cluster = store.read_cluster(ds, args.cluster)
+        cluster = ragged.read_cluster(ds, args.cluster)
         seed = int(ds["cluster_seed"].values[args.cluster])
     suffix = out.suffix.lower()
     tree = suffix == ".csv" or (suffix in PICTURES and how["style"] == "tree") or (suffix in MESH_FILES

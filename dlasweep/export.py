@@ -56,7 +56,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
     path : str or Path
         Ending in .csv, .ply, .obj or .svg.
     cluster : int, optional
-        With a dataset: which cluster (``store.cluster_points``'s index).
+        With a dataset: which cluster (``ragged.cluster_points``'s index).
     mesh : {"spheres", "tubes"}
         What a .ply or .obj file draws.
 
@@ -74,7 +74,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
     path = Path(path)
     check(path, mesh)
     if not hasattr(source, "points"):
-        from .store import read_cluster  # here, so that exporting a grown cluster needs no netCDF
+        from .ragged import read_cluster  # here, so that exporting a grown cluster needs no xarray
 
         if cluster is None:
             raise TypeError("cluster: give the index of the stored cluster to export")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import params, store
+from . import params, ragged, schema
 from .analysis import summarise
 from .bench import exponent_attribute
 from .fit import fit_mass_radius
@@ -33,7 +33,7 @@ def _sweep(ds) -> list:
     tally = full["status_count"].sum([d for d in full["status_count"].dims if d not in ("n_particles", "status")])
     for n in ds["n_particles"].values:
         counts = tally.sel(n_particles=n).values
-        lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(store.STATUS_FLAGS, counts) if k))
+        lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(schema.STATUS_FLAGS, counts) if k))
     failed = [task for task in ds.attrs.get("failed_tasks", "").split("; ") if task]
     lines += [f"failed tasks: {len(failed) or 'none'}", *(f"  {task}" for task in failed)]
     if "stop_reason" in ds.attrs:
@@ -57,12 +57,12 @@ def _sweep(ds) -> list:
 
 def _cluster(ds) -> list:
     """What ``info`` says of one grown cluster: parameters, particles, status, its own D."""
-    points = store.cluster_points(ds, 0)
+    points = ragged.cluster_points(ds, 0)
     fit = fit_mass_radius(radius_of_gyration(points))
     window = f"n in [{fit.range_lo:g}, {fit.range_hi:g}]" if fit.ok else f"not flat: {fit.reason}"
     return [f"seed: {ds.attrs['seed']}",
             "parameters: " + " ".join(f"{name}={params.text(ds[name].values)}" for name in params.PARAMETERS),
-            f"particles: {len(points)}, status {store.STATUS_FLAGS[int(ds['status'][0])]}",
+            f"particles: {len(points)}, status {schema.STATUS_FLAGS[int(ds['status'][0])]}",
             f"D of this cluster (mass-radius, 95% CI): {_number(fit.D)} "
             f"[{_number(fit.ci_lo)}, {_number(fit.ci_hi)}], {window}"]
 

@@ -119,7 +119,7 @@ def earlier_report(outdir) -> list:
 
 
 def _cluster_points(ds, i):
-    from .store import cluster_points  # here, so `import dlasweep` skips xarray until a sweep is read
+    from .ragged import cluster_points  # here, so `import dlasweep` skips xarray until a sweep is read
 
     return cluster_points(ds, i)
 

@@ -102,7 +102,7 @@ def run_cli(capsys):
 
 def science(ds):
     """The variables that must be bit-identical between runs (timings aside), clusters included."""
-    from dlasweep.store import SCIENCE
+    from dlasweep.schema import SCIENCE
 
     names = [*SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]
     return ds[names].drop_attrs(deep=False).load()

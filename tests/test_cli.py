@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
-from dlasweep import cli, store
+from dlasweep import cli, ragged, schema, store
 from dlasweep.parts import Parts
 from dlasweep.report import files as report_files
 from dlasweep.params import PARAMETERS
@@ -141,7 +141,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
     assert status == 0, err
     expected = dla.grow(80, 3, stickiness=0.5)
     with store.open_sweep(out) as ds:
-        np.testing.assert_array_equal(store.cluster_points(ds, 0), expected.points)
+        np.testing.assert_array_equal(ragged.cluster_points(ds, 0), expected.points)
         np.testing.assert_array_equal(ds["diffusion_time"], expected.steps)
         np.testing.assert_array_equal(dla.cluster_parents(ds, 0), expected.parents)
         assert float(ds["stickiness"]) == 0.5 and ds.attrs["seed"] == 3
@@ -297,7 +297,7 @@ def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_clu
     assert plan.startswith("dlasweep sweep: plan: 12 clusters, 1,800 particles")
     assert "task-0-0-0: MemoryError: no room" in failure
     with store.open_sweep(out) as ds:
-        assert (ds["status"] == store.STATUS_FLAGS.index("error")).all()
+        assert (ds["status"] == schema.STATUS_FLAGS.index("error")).all()
     status, info, err = run_cli("info", out)
     assert status == 0, err
     lines = info.splitlines()
@@ -434,7 +434,7 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
     with store.open_sweep(tmp_path / "shown.nc") as ds:
-        np.testing.assert_array_equal(store.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)
+        np.testing.assert_array_equal(ragged.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)
 
 
 def test_the_installed_command_exits_with_main_status_and_complete_output(tmp_path):

@@ -14,7 +14,7 @@ import dlasweep as dla
 from conftest import colours_shown
 from dlasweep.boxes import box_counts, default_scales
 from dlasweep.measure import anisotropy, max_radius, radius_of_gyration
-from dlasweep import store
+from dlasweep import schema
 from dlasweep.config import MIN_CI_SEEDS
 from dlasweep.readout import Readout
 from dlasweep.params import STATUSES
@@ -27,8 +27,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
     scales = default_scales(counts[-1])
     shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
     # Every variable but the growth history (a file from before it was recorded).
-    science = {name: store.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
-               for name in (*store.SCIENCE, "wall_time") if name != "radius_gyration_history"}
+    science = {name: schema.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
+               for name in (*schema.SCIENCE, "wall_time") if name != "radius_gyration_history"}
     ragged = {a: [] for a in ("x", "y", "diffusion_time", *(["parent"] if parents else []))}
     cluster = {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
     particles = []
@@ -59,7 +59,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
             cluster[f"cluster_{name}"].append(value)
     ds = xr.Dataset(
         {
-            **{name: (store.dims(name, tuple(axes)), values) for name, values in science.items()},
+            **{name: (schema.dims(name, tuple(axes)), values) for name, values in science.items()},
             "cluster_particles": ("cluster", np.array(particles), {"sample_dimension": "particle"}),
             **{name: ("particle", np.concatenate(values)) for name, values in ragged.items()},
         },
@@ -76,7 +76,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
         attrs={"title": "synthetic sweep", "spec": 'name = "synthetic"', "root_seed": 1, "source": "dlasweep test"},
     )
     for name, var in ds.variables.items():
-        var.attrs.update(store.attributes(name, var.dtype))
+        var.attrs.update(schema.attributes(name, var.dtype))
     return ds
 
 

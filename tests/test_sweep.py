@@ -24,7 +24,7 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, files_under, science
-from dlasweep import boxes, measure, progress, store, sweep
+from dlasweep import boxes, measure, progress, ragged, schema, store, sweep
 from dlasweep import task as worker
 from dlasweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
 from dlasweep.spec import parse_spec
@@ -44,8 +44,8 @@ def test_clusters_and_measures_equal_direct_growth(reference):
     for k, task in enumerate(spec.tasks()):
         seed = np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key)
         cluster = dla.grow(max(spec.counts), seed, **task.params)
-        np.testing.assert_array_equal(store.cluster_points(reference, k), cluster.points)
-        np.testing.assert_array_equal(store.cluster_parents(reference, k), cluster.parents)
+        np.testing.assert_array_equal(ragged.cluster_points(reference, k), cluster.points)
+        np.testing.assert_array_equal(ragged.cluster_parents(reference, k), cluster.parents)
         cell = reference.isel(dict(zip(["stickiness", "size", "seed"], task.index)))
         for j, n in enumerate(spec.counts):
             m = min(n, cluster.n)
@@ -56,7 +56,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
             np.testing.assert_equal(float(at["anisotropy"]), measure.anisotropy(cluster.points, [m])[0])
             _, counts = boxes.box_counts(cluster.points[:m], scales=reference["scale"].values)
             np.testing.assert_array_equal(at["box_count"].values, counts)
-            ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
+            ok = schema.STATUS_FLAGS[int(at["status"])] == "ok"
             assert ok == (m == n) and (ok or cluster.status != "ok")
 
 
@@ -187,7 +187,7 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_c
     batches_of(monkeypatch, size)  # 5: failed and finished clusters share parts
     with pytest.warns(RuntimeWarning, match="4 of 12 tasks failed"):
         ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    error = store.STATUS_FLAGS.index("error")
+    error = schema.STATUS_FLAGS.index("error")
     assert (ds["status"].sel(seed=1) == error).all() and (ds["status"].sel(seed=[0, 2]) != error).all()
     assert "task-0-0-1: RuntimeError: simulated failure" in ds.attrs["failed_tasks"]
     assert ds["cluster_particles"].values.reshape(2, 2, 3)[..., 1].sum() == 0
@@ -275,12 +275,12 @@ def test_early_stops_keep_their_status(dask_client):
         cluster = dla.grow(max(spec.counts), np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key),
                            **task.params)
         final = ds.isel({**dict(zip(["stickiness", "size", "seed"], task.index)), "n_particles": -1})
-        assert store.STATUS_FLAGS[int(final["status"])] == cluster.status
+        assert schema.STATUS_FLAGS[int(final["status"])] == cluster.status
         assert int(final["n_grown"]) == int(ds["cluster_particles"][k]) == cluster.n
         # a count never reached is given the whole growth's seconds, which are at least those to any count
         seconds = ds["wall_time"].isel(dict(zip(["stickiness", "size", "seed"], task.index))).values
         assert (seconds > 0).all() and (np.diff(seconds) >= 0).all()
-    assert (ds["status"] == store.STATUS_FLAGS.index("step_limit")).any()
+    assert (ds["status"] == schema.STATUS_FLAGS.index("step_limit")).any()
 
 
 def test_an_unreachable_scheduler_leaves_nothing(tmp_path):
