@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .branching import ratio_line
+from .figures import colour_of, new_figure, save_figure
 from .tree import MIN_BRANCHES
 
 LITERATURE = {2: "5.2 in simulations and 4.9 from the branched-growth model (both quoted by Halsey 1997)"}
@@ -28,8 +29,6 @@ def _ratio(sweep, config, name="bifurcation_ratio") -> str:
 
 def branching_figure(sweep, path):
     """Mean branch counts per order, log scale, each configuration with its fitted ratio; None without parents."""
-    from .report import colour_of, new_figure, save_figure  # here: report imports this module
-
     shown = _shown(sweep)
     if not shown:
         return None
