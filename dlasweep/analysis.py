@@ -13,7 +13,8 @@ Every cluster that reached N enters; none is dropped for its own fit.
 Beside it: the local slope D_eff(n) of the same ensemble curve over each
 octave of n with its bootstrap band; D_inf, the extrapolation
 D_eff(n) = D_inf + a n**-w over independent octaves, given only where that
-model describes the data; and the box-counting D (the mean over every
+model describes the data (``extrapolation``); each variant against the
+exact method (``exact``); and the box-counting D (the mean over every
 cluster of its own fit), a finite-cluster estimate that reads low.
 """
 
@@ -26,24 +27,17 @@ import numpy as np
 import xarray as xr
 
 from . import branching
-from .config import MIN_CI_SEEDS, MIN_COUNT, PER_OCTAVE, RESAMPLES
+from .config import MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
+from .exact import against_exact
+from .extrapolation import extrapolate
 from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts,
                   history_counts, mass_radius_counts, seed_interval)
 from .measure import radius_of_gyration
-from .params import EXACT_METHOD, STATUSES
+from .params import STATUSES
 from .ragged import cluster_points
+from .schema import config_dims, plain
 from .selection import with_selected_clusters
 
-EXPONENTS = (0.25, 0.5, 0.75, 1.0)
-"""Correction exponents w tried for D_eff(n) = D_inf + a n**-w."""
-MAX_CHI2 = 2.0
-"""Largest chi-square per degree of freedom at which the correction model describes D_eff."""
-MAX_INF_HALF_WIDTH = 0.05
-"""Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
-MIN_OCTAVES = 4
-"""Fewest independent octaves of D_eff an extrapolation needs."""
-COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
-"""Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
 _MERGE_AT = 1_000_000
@@ -171,73 +165,9 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     out = {name: var.blank(sweep.shape + tuple(sweep.extra[d] for d in var.dims)) for name, var in SUMMARY.items()}
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
-    _against_exact(sweep, out)
+    against_exact(sweep.ds, out)
     return sweep.dataset(out, resamples).merge(branching.summary(sweep.ds, sweep.config_dims, sweep.clusters,
                                                                  MIN_CI_SEEDS))
-
-
-def config_dims(ds) -> list:
-    """The dims that name a configuration of a sweep: the swept parameters (spec order), then ``size``."""
-    return [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
-
-
-def method_axes(ds) -> list:
-    """The swept parameters that switch an approximation on or off (``EXACT_METHOD``'s, with several values)."""
-    return [name for name in EXACT_METHOD if name in config_dims(ds) and ds.sizes[name] > 1]
-
-
-def exact_reference(ds, config):
-    """The configuration (indices on ``config_dims``) with every method axis at its exact value, or None."""
-    dims = config_dims(ds)
-    reference = list(config)
-    for name in method_axes(ds):
-        exact = [i for i, v in enumerate(ds[name].values) if _key(v) == EXACT_METHOD[name]]
-        if not exact:
-            return None
-        reference[dims.index(name)] = exact[0]
-    return tuple(reference)
-
-
-def _against_exact(sweep, out):
-    """Each configuration's departure from the exact method at equal N, with its 95% CI half-width."""
-    if not method_axes(sweep.ds):
-        return
-    for config in np.ndindex(*sweep.shape):
-        ref = exact_reference(sweep.ds, config)
-        if ref is None:
-            continue
-        if ref == config:
-            for name in COMPARED:
-                out[f"{name}_vs_exact"][config] = out[f"{name}_vs_exact_half_width"][config] = 0.0
-            continue
-        for name, relative in COMPARED.items():
-            stem = "rg" if name == "rg_mean" else name
-            value, base = out[name][config], out[name][ref]
-            half, base_half = ((out[f"{stem}_ci_hi"][c] - out[f"{stem}_ci_lo"][c]) / 2 for c in (config, ref))
-            if relative:
-                out[f"{name}_vs_exact"][config] = value / base - 1
-                out[f"{name}_vs_exact_half_width"][config] = value / base * np.hypot(half / value, base_half / base)
-            else:
-                out[f"{name}_vs_exact"][config] = value - base
-                out[f"{name}_vs_exact_half_width"][config] = np.hypot(half, base_half)
-    _pareto(sweep, out)
-
-
-def _pareto(sweep, out):
-    """Mark, at each count, the configurations no other beats on both cost and accuracy.
-
-    Accuracy is the bound |Rg/Rg(exact) - 1| + its CI half-width (Rg at equal
-    N separates the methods more sharply than D); the exact method's bound is 0.
-    """
-    cost = out["seconds_per_particle"].reshape(-1, sweep.n_counts)
-    bound = (np.abs(out["rg_mean_vs_exact"]) + out["rg_mean_vs_exact_half_width"]).reshape(-1, sweep.n_counts)
-    front = np.zeros_like(cost)
-    for k in range(sweep.n_counts):
-        c, b = cost[:, k], bound[:, k]
-        for i in np.flatnonzero(np.isfinite(c) & np.isfinite(b)):
-            beaten = (c <= c[i]) & (b <= b[i]) & ((c < c[i]) | (b < b[i]))
-            front[i, k] = not beaten.any()
-    out["pareto"][...] = front.reshape(out["pareto"].shape)
 
 
 class _Sweep:
@@ -253,6 +183,7 @@ class _Sweep:
         self.history = history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
+        self.centres = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
         # Files written before the growth history was recorded: the stored clusters give it.
@@ -317,10 +248,10 @@ class _Sweep:
     def _cluster_index(self):
         """(configuration, seed index) -> position on ``cluster``."""
         ds = self.ds
-        lookup = {d: {_key(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
+        lookup = {d: {plain(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
         where = {}
         for i in range(ds.sizes["cluster"]):
-            at = tuple(lookup[d][_key(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
+            at = tuple(lookup[d][plain(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
             where[at[:-1], at[-1]] = i
         return where
 
@@ -346,7 +277,7 @@ class _Sweep:
             data[name] = ((*self.config_dims, *var.dims), values, {"long_name": var.long_name})
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
         coords["n_history"] = self.history
-        coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
+        coords["n_local"] = self.centres
         coords["status"] = np.array(STATUSES, object)
         coords["scale_mid"] = np.sqrt(self.scales[1:] * self.scales[:-1])
         coords["diffusion_bin"] = np.sqrt(self.time_edges[1:] * self.time_edges[:-1])
@@ -542,53 +473,11 @@ def _local(sweep, config, curves, out, resamples):
     boot = np.log(bootstrap_means(curves, _stream("D_local", sweep.counts[-1]), resamples))
     band = np.array([_slopes(boot[:, w], log_n[w]) for w in sweep.octaves])
     o["D_local_ci_lo"][:], o["D_local_ci_hi"][:] = seed_interval(local, band, len(curves), axis=1)
-    _extrapolate(sweep, o, local, band, len(curves))
-
-
-def _extrapolate(sweep, o, local, band, n_seeds):
-    """D_inf from D_eff(n) = D_inf + a n**-w over independent (non-overlapping) octaves (``band``: the
-    bootstrap of D_eff over ``n_seeds`` clusters)."""
-    step = PER_OCTAVE
-    pick = np.arange(len(local) - 1, -1, -step)[::-1]  # back from the largest octave
-    centres = np.array([np.exp(np.log(sweep.history[sweep.octaves[i]]).mean()) for i in pick])
-    y, boot = local[pick], band[pick]
-    sigma = boot.std(axis=1, ddof=1)
-    if len(pick) < MIN_OCTAVES:
-        o["D_inf_reason"][()] = f"{len(pick)} independent octaves of D_eff, need {MIN_OCTAVES}"
-        return
-    best = None
-    # The smallest octaves are the transient: start as low as the model allows.
-    for start in range(len(pick) - MIN_OCTAVES + 1):
-        for w in EXPONENTS:
-            design = np.c_[np.ones(len(pick) - start), centres[start:] ** -w]
-            weights = 1 / sigma[start:]
-            coef, *_ = np.linalg.lstsq(design * weights[:, None], y[start:] * weights, rcond=None)
-            chi2 = (((design @ coef - y[start:]) * weights) ** 2).sum() / (len(design) - 2)
-            if chi2 <= MAX_CHI2 and (best is None or chi2 < best[0]):
-                best = (chi2, start, w, design, weights, coef)
-        if best is not None:
-            break
-    if best is None:
-        o["D_inf_reason"][()] = (f"D_eff(n) is not D_inf + a n^-w for any w in {EXPONENTS} "
-                                 f"(chi2/dof > {MAX_CHI2:g} over every range of {MIN_OCTAVES} octaves)")
-        return
-    _, start, w, design, weights, coef = best
-    solve = np.linalg.pinv(design * weights[:, None])
-    values = solve[0] @ (boot[start:] * weights[:, None])
-    lo, hi = seed_interval(coef[0], values, n_seeds)
-    if (hi - lo) / 2 > MAX_INF_HALF_WIDTH:
-        o["D_inf_reason"][()] = f"extrapolation too uncertain (95% CI half-width {(hi - lo) / 2:.3f})"
-        return
-    o["D_inf"][()], o["D_inf_ci_lo"][()], o["D_inf_ci_hi"][()] = coef[0], lo, hi
-    o["D_inf_exponent"][()], o["D_inf_range_lo"][()] = w, centres[start]
+    for name, value in extrapolate(sweep.centres, local, band, len(curves)).items():
+        o[name][()] = value
 
 
 def _slopes(log_rg, log_n):
     """Least-squares slope of log_n on each row of log_rg."""
     x = log_rg - log_rg.mean(axis=-1, keepdims=True)
     return (x * (log_n - log_n.mean())).sum(axis=-1) / (x * x).sum(axis=-1)
-
-
-def _key(value):
-    """A hashable, type-stable form of a coordinate value (bools and numpy scalars)."""
-    return value.item() if hasattr(value, "item") else value

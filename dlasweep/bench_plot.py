@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .bench import exponent_attribute
-from .readout import plain
+from .schema import plain
 from .figures import colour_of, new_figure, save_figure
 
 

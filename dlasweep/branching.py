@@ -41,7 +41,7 @@ def summary(ds, config_dims, clusters, min_seeds) -> xr.Dataset:
     ds : xarray.Dataset
         The sweep (a selection's clusters only: ``selection.with_selected_clusters``).
     config_dims : list of str
-        The configuration dims (``analysis.config_dims``).
+        The configuration dims (``schema.config_dims``).
     clusters : dict
         (configuration index tuple, seed index) -> position on ``cluster``.
     min_seeds : int

@@ -166,6 +166,17 @@ def dims(name, axes) -> tuple:
     return tuple(d for dim in SCHEMA[name].dims for d in (axes if dim == _CONFIG else (dim,)))
 
 
+def config_dims(ds) -> list:
+    """The dims that name a configuration of a sweep ``ds``: the swept parameters (spec order), then ``size``."""
+    return [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
+
+
+def plain(value):
+    """A coordinate's value as a plain Python one: a numpy scalar's item, bytes (a char array's) as str."""
+    value = value.item() if hasattr(value, "item") else value
+    return value.decode() if isinstance(value, bytes) else value
+
+
 class StoreError(ValueError):
     """A file that is not a readable dlasweep dataset; one line naming it."""
 
