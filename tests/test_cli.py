@@ -2,6 +2,7 @@
 sweeps end to end; what ``info`` tells of a file."""
 
 import contextlib
+import importlib
 import io
 import shutil
 import signal
@@ -209,8 +210,8 @@ def test_report_shows_progress_on_a_terminal_only(tiny_sweep, run_cli, tmp_path,
     from dlasweep import cli
 
     bars = []
-    real_bar = cli._steps_bar
-    monkeypatch.setattr(cli, "_steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
+    real_bar = cli.steps_bar
+    monkeypatch.setattr(cli, "steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
     status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "piped")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
@@ -424,12 +425,12 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     from dlasweep import cli
 
     bars = []
-    real_bar = cli._growth_bar
-    monkeypatch.setattr(cli, "_growth_bar", lambda n, model: bars.append(real_bar(n, model)) or bars[-1])
+    real_bar = cli.growth_bar
+    monkeypatch.setattr(cli, "growth_bar", lambda n, model: bars.append(real_bar(n, model)) or bars[-1])
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    monkeypatch.setattr(cli, "compiled", lambda model: model != "offlattice")
+    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled", lambda model: model != "offlattice")
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
