@@ -27,7 +27,7 @@ import numpy as np
 import xarray as xr
 
 from . import branching
-from .config import MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
+from .config import LEVEL, MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
 from .exact import against_exact
 from .extrapolation import extrapolate
 from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts,
@@ -65,8 +65,8 @@ class Summarised:
 _N, _SEEDS = ("n_particles",), ("n_particles", "seed")
 SUMMARY = {
     "D": Summarised(_N, "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window"),
-    "D_ci_lo": Summarised(_N, "lower end of the 95% CI of D (bootstrap over seeds, window fixed)"),
-    "D_ci_hi": Summarised(_N, "upper end of the 95% CI of D (bootstrap over seeds, window fixed)"),
+    "D_ci_lo": Summarised(_N, f"lower end of the {LEVEL} CI of D (bootstrap over seeds, window fixed)"),
+    "D_ci_hi": Summarised(_N, f"upper end of the {LEVEL} CI of D (bootstrap over seeds, window fixed)"),
     "D_range_lo": Summarised(_N, "smallest particle count of the fitted window"),
     "D_range_hi": Summarised(_N, "largest particle count of the fitted window"),
     "D_drift": Summarised(_N, "change of the local slope of the ensemble curve across the fitted window"),
@@ -74,32 +74,32 @@ SUMMARY = {
     "D_seeds": Summarised(_N, "clusters that reached N and enter D", np.int64, 0),
     "D_seed_std": Summarised(_N, "standard deviation over seeds of the per-cluster mass-radius D"),
     "D_box": Summarised(_N, "box-counting D, mean of the per-cluster fits of every cluster that reached N (reads low)"),
-    "D_box_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of D_box"),
-    "D_box_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of D_box"),
+    "D_box_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of D_box"),
+    "D_box_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of D_box"),
     "D_box_ok_fraction": Summarised(_N, "fraction of those clusters whose own box-counting fit is flat"),
     "rg_mean": Summarised(_N, "mean radius of gyration over the seeds that reached N"),
-    "rg_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_mean"),
-    "rg_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_mean"),
+    "rg_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of rg_mean"),
+    "rg_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of rg_mean"),
     "rg_over_rmax": Summarised(_N, "mean of Rg / R_max over the seeds that reached N"),
-    "rg_over_rmax_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_over_rmax"),
-    "rg_over_rmax_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_over_rmax"),
+    "rg_over_rmax_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of rg_over_rmax"),
+    "rg_over_rmax_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of rg_over_rmax"),
     "anisotropy": Summarised(_N,
                              "mean over the seeds that reached N of the cubic anisotropy of the outer half of the "
                              "mass"),
-    "anisotropy_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of anisotropy"),
-    "anisotropy_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of anisotropy"),
+    "anisotropy_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of anisotropy"),
+    "anisotropy_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of anisotropy"),
     "seconds_per_particle": Summarised(_N, "mean wall time per particle to grow to N"),
     "steps_per_particle": Summarised(_N, "mean walk steps per particle to grow to N"),
     "pareto": Summarised(_N,
                          "on the Pareto front of cost per particle against the bound on |Rg/Rg(exact) - 1| (1) or not "
                          "(0)", np.int8, 0),
     "D_vs_exact": Summarised(_N, "D minus D of the exact method (other parameters equal) at equal N"),
-    "D_vs_exact_half_width": Summarised(_N, "95% CI half-width of D_vs_exact (both CIs in quadrature)"),
+    "D_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of D_vs_exact (both CIs in quadrature)"),
     "rg_mean_vs_exact": Summarised(_N, "rg_mean over rg_mean of the exact method, minus 1, at equal N"),
-    "rg_mean_vs_exact_half_width": Summarised(_N, "95% CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
+    "rg_mean_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
     "rg_over_rmax_vs_exact": Summarised(_N, "rg_over_rmax minus that of the exact method at equal N"),
     "rg_over_rmax_vs_exact_half_width": Summarised(_N,
-                                                   "95% CI half-width of rg_over_rmax_vs_exact (both CIs in "
+                                                   f"{LEVEL} CI half-width of rg_over_rmax_vs_exact (both CIs in "
                                                    "quadrature)"),
     "D_cluster": Summarised(_SEEDS, "mass-radius D of one cluster's own growth history up to N"),
     "D_cluster_ok": Summarised(_SEEDS, "whether that cluster's fit is flat (1) or not (0)", np.int8, 0),
@@ -118,14 +118,14 @@ SUMMARY = {
                                    "median diffusion time of the particles that stuck at that depth, pooled over the "
                                    "stored clusters"),
     "D_local": Summarised(("n_local",), "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve"),
-    "D_local_ci_lo": Summarised(("n_local",), "lower end of the bootstrap 95% band of D_local"),
-    "D_local_ci_hi": Summarised(("n_local",), "upper end of the bootstrap 95% band of D_local"),
+    "D_local_ci_lo": Summarised(("n_local",), f"lower end of the bootstrap {LEVEL} band of D_local"),
+    "D_local_ci_hi": Summarised(("n_local",), f"upper end of the bootstrap {LEVEL} band of D_local"),
     "rg_history": Summarised(("n_history",),
                              "mean radius of gyration over the seeds that reached the largest count, along their "
                              "growth"),
     "D_inf": Summarised((), "D extrapolated to infinite N: D_eff(n) = D_inf + a n**-w over independent octaves"),
-    "D_inf_ci_lo": Summarised((), "lower end of the bootstrap 95% CI of D_inf"),
-    "D_inf_ci_hi": Summarised((), "upper end of the bootstrap 95% CI of D_inf"),
+    "D_inf_ci_lo": Summarised((), f"lower end of the bootstrap {LEVEL} CI of D_inf"),
+    "D_inf_ci_hi": Summarised((), f"upper end of the bootstrap {LEVEL} CI of D_inf"),
     "D_inf_exponent": Summarised((), "correction exponent w of the extrapolation"),
     "D_inf_range_lo": Summarised((), "smallest count of the octaves the extrapolation uses"),
     "status_count": Summarised(("n_particles", "status"), "clusters with each growth status at N", np.int64, 0),
@@ -134,7 +134,7 @@ SUMMARY = {
                                 "none", np.int64, -1),
     "D_reason": Summarised(_N, "why D_ok is 0; empty otherwise", str),
     "D_ci_reason": Summarised(_N,
-                              "why D has no 95% CI (and no other interval over seeds is given); empty otherwise", str),
+                              f"why D has no {LEVEL} CI (and no other interval over seeds is given); empty otherwise", str),
     "D_inf_reason": Summarised((), "why D_inf is not given; empty otherwise", str),
 }
 """Every variable of ``summarise``'s dataset, in its order: the one place its dims, type and
@@ -284,7 +284,7 @@ class _Sweep:
         coords["depth_bin"] = (DEPTH_EDGES[1:] + DEPTH_EDGES[:-1]) / 2
         return xr.Dataset(data, coords=coords, attrs={
             "title": "dlasweep summary: fractal dimension of every configuration",
-            "interval": "every interval is a 95% confidence interval over seeds (Student's t: of the mean, or "
+            "interval": f"every interval is a {LEVEL} confidence interval over seeds (Student's t: of the mean, or "
                         f"on a bootstrap's spread), given where at least {MIN_CI_SEEDS} clusters enter",
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
             "bootstrap_resamples": resamples,
@@ -412,7 +412,7 @@ def _headline(curves, counts, rng, resamples):
 
 def too_few(n) -> str:
     """Why a statistic over ``n`` clusters has no interval (``MIN_CI_SEEDS``)."""
-    return (f"{n} cluster{'s' * (n != 1)} reached N, fewer than the {MIN_CI_SEEDS} a 95% CI needs "
+    return (f"{n} cluster{'s' * (n != 1)} reached N, fewer than the {MIN_CI_SEEDS} a {LEVEL} CI needs "
             "(over fewer, the spread over seeds is too poorly known)")
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .config import LEVEL
 from .fit import ensemble
 from .ragged import cluster_parents
 from .tree import MIN_BRANCHES, branching
@@ -20,13 +21,13 @@ ATTRS = {
     "bifurcation_ratio": "Horton-Strahler bifurcation ratio R_b = N_k / N_(k+1), mean over the stored clusters of "
                          f"each cluster's fit of ln N_k against k over the orders with at least {MIN_BRANCHES} "
                          "branches, largest count",
-    "bifurcation_ratio_ci_lo": "lower end of the 95% CI of bifurcation_ratio (Student's t over clusters)",
-    "bifurcation_ratio_ci_hi": "upper end of the 95% CI of bifurcation_ratio (Student's t over clusters)",
+    "bifurcation_ratio_ci_lo": f"lower end of the {LEVEL} CI of bifurcation_ratio (Student's t over clusters)",
+    "bifurcation_ratio_ci_hi": f"upper end of the {LEVEL} CI of bifurcation_ratio (Student's t over clusters)",
     "bifurcation_ratio_cluster": "bifurcation ratio of one stored cluster",
     "chemical_dimension": "chemical-distance dimension d_l: particles within l bonds of the seed ~ l**d_l, "
                           "mean over the stored clusters",
-    "chemical_dimension_ci_lo": "lower end of the 95% CI of chemical_dimension (Student's t over clusters)",
-    "chemical_dimension_ci_hi": "upper end of the 95% CI of chemical_dimension (Student's t over clusters)",
+    "chemical_dimension_ci_lo": f"lower end of the {LEVEL} CI of chemical_dimension (Student's t over clusters)",
+    "chemical_dimension_ci_hi": f"upper end of the {LEVEL} CI of chemical_dimension (Student's t over clusters)",
     "branch_count": "number of branches of each Horton-Strahler order, mean over the stored clusters (0 where a "
                     "cluster has no branch of that order)",
     "branch_clusters": "stored clusters with parents that enter the branch statistics",

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import PER_OCTAVE
+from .config import LEVEL, PER_OCTAVE
 from .fit import seed_interval
 
 EXPONENTS = (0.25, 0.5, 0.75, 1.0)
@@ -68,5 +68,5 @@ def extrapolate(centres, local, band, n_seeds) -> dict:
     values = solve[0] @ (boot[start:] * weights[:, None])
     lo, hi = seed_interval(coef[0], values, n_seeds)
     if (hi - lo) / 2 > MAX_INF_HALF_WIDTH:
-        return {"D_inf_reason": f"extrapolation too uncertain (95% CI half-width {(hi - lo) / 2:.3f})"}
+        return {"D_inf_reason": f"extrapolation too uncertain ({LEVEL} CI half-width {(hi - lo) / 2:.3f})"}
     return {"D_inf": coef[0], "D_inf_ci_lo": lo, "D_inf_ci_hi": hi, "D_inf_exponent": w, "D_inf_range_lo": centres[start]}

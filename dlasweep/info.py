@@ -11,6 +11,7 @@ import numpy as np
 from . import params, ragged, schema
 from .analysis import summarise
 from .bench import exponent_attribute
+from .config import LEVEL
 from .fit import fit_mass_radius
 from .measure import radius_of_gyration
 
@@ -42,7 +43,7 @@ def _sweep(ds) -> list:
 
     summary = full.isel(n_particles=-1)
     config = list(summary["D_inf"].dims)
-    header = [*config, "N", "seeds", "D", "95% CI", "D_inf"]
+    header = [*config, "N", "seeds", "D", f"{LEVEL} CI", "D_inf"]
     rows = []
     for index in np.ndindex(summary["D_inf"].shape):
         at = summary.isel(dict(zip(config, index)))
@@ -51,7 +52,7 @@ def _sweep(ds) -> list:
         rows.append([*(params.text(at[name].values) for name in config), str(int(at["n_particles"])),
                      str(int(at["D_seeds"])), _number(at["D"]),
                      f"[{_number(at['D_ci_lo'])}, {_number(at['D_ci_hi'])}]", d_inf])
-    return [*lines, "headline D at the largest N (ensemble mass-radius, 95% CI over seeds):",
+    return [*lines, f"headline D at the largest N (ensemble mass-radius, {LEVEL} CI over seeds):",
             *_table(header, rows)]
 
 
@@ -63,7 +64,7 @@ def _cluster(ds) -> list:
     return [f"seed: {ds.attrs['seed']}",
             "parameters: " + " ".join(f"{name}={params.text(ds[name].values)}" for name in params.PARAMETERS),
             f"particles: {len(points)}, status {schema.STATUS_FLAGS[int(ds['status'][0])]}",
-            f"D of this cluster (mass-radius, 95% CI): {_number(fit.D)} "
+            f"D of this cluster (mass-radius, {LEVEL} CI): {_number(fit.D)} "
             f"[{_number(fit.ci_lo)}, {_number(fit.ci_hi)}], {window}"]
 
 

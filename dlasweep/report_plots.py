@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import MIN_CI_SEEDS
+from .config import LEVEL, MIN_CI_SEEDS
 from .figures import MAX_PANELS, colour_of, log_x, mark_missing, new_figure, save_figure
 from .params import EXACT_METHOD, text
 from .pictures import draw_points
@@ -116,7 +116,7 @@ def _dimension_vs_n(sweep, path):
             ax.fill_between(n_local, sweep.at("D_local_ci_lo", config), sweep.at("D_local_ci_hi", config),
                             color="C0", alpha=0.15, lw=0)
             ax.plot(n_local, sweep.at("D_local", config), color="C0", lw=0.8,
-                    label="local slope D_eff(n)" + (", 95% band" if band else ""))
+                    label="local slope D_eff(n)" + (f", {LEVEL} band" if band else ""))
         for e, (name, title) in enumerate(ESTIMATORS):
             mean, err = sweep.bars(name, config)
             ax.errorbar(sweep.counts * (1.06 if e else 1.0), mean, yerr=err, color=f"C{3 * e}", marker="os"[e],
@@ -126,7 +126,7 @@ def _dimension_vs_n(sweep, path):
                 ax.annotate(f"{seeds}", (n, d), fontsize=6, xytext=(0, 6), textcoords="offset points", ha="center")
         if config in inf:
             ax.axhspan(sweep.at("D_inf_ci_lo", config), sweep.at("D_inf_ci_hi", config), color="C2", alpha=0.2,
-                       lw=0, label="D_inf, 95% CI")
+                       lw=0, label=f"D_inf, {LEVEL} CI")
         if sweep.reference:
             ax.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
         log_x(ax)
@@ -134,17 +134,17 @@ def _dimension_vs_n(sweep, path):
         ax.set_xlabel("particles N")
         ax.set_ylabel("D")
     fig.legend(*_legend(axes), loc="outside lower center", fontsize=6, ncols=3)
-    fig.suptitle("D against cluster size (" + ("bars: 95% CI; " if bars else f"no CI: fewer than {MIN_CI_SEEDS} "
+    fig.suptitle("D against cluster size (" + (f"bars: {LEVEL} CI; " if bars else f"no CI: fewer than {MIN_CI_SEEDS} "
                  "clusters; ") + "numbers: clusters in the ensemble)", fontsize=9)
     save_figure(fig, path)
     said = ["the headline ensemble mass-radius D at each N (filled) with the number of clusters in it",
             "the mean box-counting D (open squares, reads low)",
-            "the local slope D_eff(n)" + (" with its 95% band" if band else "")]
+            "the local slope D_eff(n)" + (f" with its {LEVEL} band" if band else "")]
     if inf:
-        said.append("D_inf with its 95% CI (green) where the extrapolation holds")
+        said.append(f"D_inf with its {LEVEL} CI (green) where the extrapolation holds")
     said.append(f"the dashed line is the {sweep.dim}D off-lattice reference" if sweep.reference
                 else "no reference line: the off-lattice value is not the lattice model's")
-    ci = ("Bars are 95% CIs" if bars else
+    ci = (f"Bars are {LEVEL} CIs" if bars else
           f"No interval is drawn: fewer than {MIN_CI_SEEDS} clusters per configuration (see `Intervals`)")
     return "One panel per configuration, on one y-axis: " + "; ".join(said) + ". " + ci + "."
 
@@ -197,12 +197,12 @@ def _anisotropy(sweep, path):
     log_x(ax)
     ax.set_xlabel("particles N")
     ci = _any_ci(sweep, "anisotropy")
-    ax.set_ylabel("anisotropy of the outer mass" + (" (95% CI)" if ci else ""))
+    ax.set_ylabel("anisotropy of the outer mass" + (f" ({LEVEL} CI)" if ci else ""))
     ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)", fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     save_figure(fig, path)
     return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds"
-            + (" with its 95% CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
+            + (f" with its {LEVEL} CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
             "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N).")
 
 
@@ -228,7 +228,7 @@ def _dimension_spread(sweep, path):
         row = sweep.row(config, last)
         ax.errorbar([c - 0.2], [row["D"]], yerr=np.reshape(error_bars(row["D"], row["D_ci_lo"], row["D_ci_hi"]),
                                                           (2, 1)), color="k",
-                    capsize=3, marker="_", ms=14, label=("ensemble D" + (", 95% CI" if ci else "")) if c == 0 else None)
+                    capsize=3, marker="_", ms=14, label=("ensemble D" + (f", {LEVEL} CI" if ci else "")) if c == 0 else None)
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1)
     ax.set_xticks(range(len(shown)), [sweep.label(c) for c in shown], rotation=30, ha="right", fontsize=7)
@@ -237,7 +237,7 @@ def _dimension_spread(sweep, path):
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     save_figure(fig, path)
     return ("D of every seed's own fit at the largest count, both estimators (red crosses: the fit's local slope "
-            "is not flat), and the ensemble headline (black)" + (" with its 95% CI." if ci else
+            "is not flat), and the ensemble headline (black)" + (f" with its {LEVEL} CI." if ci else
                                                                   f", no CI: fewer than {MIN_CI_SEEDS} seeds."))
 
 
@@ -314,7 +314,7 @@ def _speed_accuracy(sweep, path):
     if len(front) > 1:
         dev_rg.plot([r["seconds_per_particle"] for r in front], [r["rg_mean_vs_exact"] for r in front],
                     color="k", lw=0.8, ls=":", label="Pareto front (cheapest for its accuracy)")
-    ci = ", 95% CI" if _any_ci(sweep, "D") else ""
+    ci = f", {LEVEL} CI" if _any_ci(sweep, "D") else ""
     for ax, label in ((dev_d, f"D(variant) - D(exact){ci}"), (dev_rg, f"Rg(variant) / Rg(exact) - 1{ci}")):
         ax.axhline(0, color="k", lw=0.8)
         log_x(ax)
@@ -329,7 +329,7 @@ def _speed_accuracy(sweep, path):
         f"{m}={text(EXACT_METHOD[m])}" for m in methods) + ") with the other parameters equal, at the largest count: "
         "D (left) and Rg at equal N (right, the sharper test). One colour and marker per set of shortcuts taken; "
         "black edges and the dotted line mark the Pareto front (no variant is both cheaper and closer)."
-        + (" Bars combine both 95% CIs." if _any_ci(sweep, "D") else
+        + (f" Bars combine both {LEVEL} CIs." if _any_ci(sweep, "D") else
            f" No bars and no Pareto front: fewer than {MIN_CI_SEEDS} seeds give no CI."))
 
 
@@ -352,9 +352,9 @@ def _failure(sweep, path):
             if name == "D" and sweep.reference:
                 panel.axhline(sweep.reference, color="k", ls="--", lw=1, label=f"reference {sweep.reference}")
             panel.set_xlabel(f"{axis} (exact: {text(EXACT_METHOD[axis])})")
-            panel.set_ylabel(f"{label}" + (" (95% CI)" if "ci" in drawn else ""))
+            panel.set_ylabel(f"{label}" + (f" ({LEVEL} CI)" if "ci" in drawn else ""))
             panel.legend(fontsize=6, loc="best")
-    numbers = "\n(numbers: bias in units of the combined 95% CI half-width)" if "bias" in drawn else ""
+    numbers = f"\n(numbers: bias in units of the combined {LEVEL} CI half-width)" if "bias" in drawn else ""
     fig.suptitle(f"Shortcuts against the exact method at N={sweep.counts[last]}, the model's parameters equal"
                  + numbers, fontsize=9)
     save_figure(fig, path)
@@ -398,7 +398,7 @@ def _failure_series(sweep, panel, axis, name, base, colour, scene, last, shift) 
     ref = sweep.row(exact[0], last)
     if np.isfinite(ref[f"{name}_ci_lo"]):
         panel.axhspan(ref[f"{name}_ci_lo"], ref[f"{name}_ci_hi"], color=colour, alpha=0.15, lw=0,
-                      label=None if scene else "exact method, 95% CI")
+                      label=None if scene else f"exact method, {LEVEL} CI")
         drawn.add("band")
     panel.axhline(ref[name], color=colour, lw=1, ls=":", label=None if scene else "exact method")
     for x, r in zip(xs, rows):
@@ -422,15 +422,15 @@ def _failure_caption(methods, scenes, every, drawn) -> str:
                      + (f", the first {len(scenes)} drawn)" if every > len(scenes) else ")"))
     if "exact" in drawn:
         parts.append("the dotted line is the exact method's value" + (
-            " and the shaded band its 95% CI, drawn across the panel (an infinite kill radius or an exact "
+            f" and the shaded band its {LEVEL} CI, drawn across the panel (an infinite kill radius or an exact "
             "contact has no place on the axis)" if "band" in drawn else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)"))
     if "no exact" in drawn:
         parts.append("some scenes have no exact-method configuration in the sweep, so nothing to compare with")
     if "bias" in drawn:
-        parts.append("each point is labelled with its bias in units of the combined 95% CI half-width: beyond "
+        parts.append(f"each point is labelled with its bias in units of the combined {LEVEL} CI half-width: beyond "
                      "+-1 the bias is resolved")
     if "ci" in drawn:
-        parts.append("bars are 95% CIs")
+        parts.append(f"bars are {LEVEL} CIs")
     if "flagged" in drawn:
         parts.append("red rings: a cluster stopped early")
     if "missing" in drawn:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
+from .config import LEVEL, MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
 from .figures import MAX_PANELS
 from .params import EXACT_METHOD, text
 from .readout import REFERENCE_D, resolved
@@ -77,7 +77,7 @@ def _markdown_table(sweep) -> str:
 
 def write_table(sweep, path) -> Path:
     path.write_text(
-        f"Every interval is a 95% confidence interval (bootstrap over seeds), given from {MIN_CI_SEEDS} "
+        f"Every interval is a {LEVEL} confidence interval (bootstrap over seeds), given from {MIN_CI_SEEDS} "
         "clusters on. D mass-radius: one fit of "
         "n ~ <Rg>^D to the seed-averaged growth histories of every cluster that reached N, over the window "
         "given. Box counting: mean of every cluster's own fit (in brackets: the share of fits whose local "
@@ -103,7 +103,7 @@ def _differences(sweep) -> list:
     pairs = sweep.differences(last)
     if not pairs:
         return []
-    lines = [f"D between configurations one value apart, at N = {sweep.counts[last]}: the difference ± its 95% CI "
+    lines = [f"D between configurations one value apart, at N = {sweep.counts[last]}: the difference ± its {LEVEL} CI "
              "half-width (both CIs in quadrature); resolved when that interval excludes zero, otherwise the "
              "difference is only bounded.", ""]
     for config, other, value, half in pairs[:MAX_PANELS]:
@@ -121,7 +121,7 @@ def _deviation_table(sweep) -> list:
     if not methods or not any(np.isfinite(r["rg_mean_vs_exact"]) for r in rows):
         return []
     lines = [f"Each variant against the exact method ({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}) with "
-             f"the other parameters equal, at N = {sweep.counts[last]}: the difference ± its 95% CI half-width; "
+             f"the other parameters equal, at N = {sweep.counts[last]}: the difference ± its {LEVEL} CI half-width; "
              "resolved when the interval excludes zero, otherwise bounded.", "",
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
                                 "Rg/Rmax - exact"]) + " |", "|" + "---|" * (len(sweep.config_dims) + 3)]

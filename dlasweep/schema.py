@@ -65,6 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import params as _params
+from .config import LEVEL
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -121,7 +122,7 @@ SCHEMA = {
     "walk_steps": Variable(_SWEPT, np.int64, "1", "walk steps (or exact jumps) of every walker until this count"),
     "wall_time": Variable(_SWEPT, np.float64, "s", "seconds spent growing the cluster to this count"),
     "D_ci_half_width": Variable((_CONFIG, "size"), np.float64, "1",
-                                "half-width of the 95% bootstrap confidence interval over seeds of the headline "
+                                f"half-width of the {LEVEL} bootstrap confidence interval over seeds of the headline "
                                 "(mass-radius) fractal dimension D at the largest particle count"),
     # coordinates
     "n_particles": Variable(("n_particles",), np.int64, "1", "target number of particles"),
