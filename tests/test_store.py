@@ -296,27 +296,6 @@ def test_save_is_atomic(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_cluster_points(tmp_path):
-    ds = synthetic_dataset()
-    counts = ds["cluster_particles"].values
-    k = int(np.flatnonzero(counts)[2])
-    start = counts[:k].sum()
-    expected = np.stack([ds["x"].values, ds["y"].values], axis=1)[start:start + counts[k]]
-    np.testing.assert_array_equal(ragged.cluster_points(ds, k), expected)
-    where = {name.removeprefix("cluster_"): ds[name].values[k]
-             for name in ds.coords if name.startswith("cluster_")}
-    np.testing.assert_array_equal(ragged.cluster_points(ds, **where), expected)
-    parents = ragged.cluster_parents(ds, **where)
-    assert parents.dtype == np.int32
-    np.testing.assert_array_equal(parents, ds["parent"].values[start:start + counts[k]])
-    with pytest.raises(ValueError, match="matches 8 clusters"):
-        ragged.cluster_points(ds, model="lattice")
-    with pytest.raises(ValueError, match="colour: not a cluster parameter"):
-        ragged.cluster_points(ds, colour="red")
-    with pytest.raises(IndexError):
-        ragged.cluster_points(ds, 99)
-
-
 def test_one_cluster_file(tmp_path):
     points = np.array([[0, 0], [1, 0], [1, 1]])
     cluster = Cluster(points, np.array([0, 5, 7]), "boundary", resolve(size=16), parents=np.array([-1, 0, 1]))
