@@ -13,17 +13,22 @@ what the walk touched, and the walk's hot loop stays as it was.
 import numpy as np
 
 from ..._jit import jit
+from ..maps import tiled, zeroed
 
 TILE_SHIFT = (3, 2)
-"""Tiles of the site index have side 2**shift (2D: 8, 3D: 4): 64 sites, a particle's neighbours mostly in one."""
+"""Tiles of the site index have side 2**shift (2D: 8, 3D: 4): 64 sites, one bit each in a word."""
+DIRECTORY_BITS = (5, 3)
+"""The directory of tiles is stored in squares (cubes) of 2**bits tiles (2D: 32x32 int32, a 4 KiB page),
+so that its pages along the cluster are the only ones written (``maps.zeroed``)."""
 
 
 @jit
 def _box(points, dim, period):
-    """Lowest site and tiles per axis of a box one site larger than the sites (a substrate's sides: its period)."""
+    """Lowest site and tiles a side of a square (cubic) box one site larger than the sites
+    (a substrate's sides: its period)."""
     shift = TILE_SHIFT[dim - 2]
     lo = np.zeros(3, np.int64)
-    tiles = np.ones(3, np.int64)
+    side = 1
     for a in range(dim):
         if period > 0 and a < dim - 1:
             low, high = 0, period - 1
@@ -33,20 +38,21 @@ def _box(points, dim, period):
                 low, high = min(low, points[i, a]), max(high, points[i, a])
             low, high = low - 1, high + 1
         lo[a] = low
-        tiles[a] = ((high - low) >> shift) + 1
-    return lo, tiles
+        side = max(side, ((high - low) >> shift) + 1)
+    return lo, side
 
 
 @jit
-def _slot(q0, q1, q2, dim, lo, tiles, directory):
-    """Where site q's particle index lives: (directory entry, place in its tile), or (-1, 0) off the box."""
+def _slot(q0, q1, q2, dim, lo, side):
+    """Where site q lives: (its tile's directory entry, its bit in the tile's word), or (-1, 0) off the box."""
     shift = TILE_SHIFT[dim - 2]
     mask = (1 << shift) - 1
     r0, r1, r2 = q0 - lo[0], q1 - lo[1], q2 - lo[2]
     t0, t1, t2 = r0 >> shift, r1 >> shift, r2 >> shift
-    if r0 < 0 or r1 < 0 or r2 < 0 or t0 >= tiles[0] or t1 >= tiles[1] or t2 >= tiles[2]:
+    if r0 < 0 or r1 < 0 or r2 < 0 or t0 >= side or t1 >= side or t2 >= side:
         return -1, 0
-    return t0 + tiles[0] * (t1 + tiles[1] * t2), (r0 & mask) | ((r1 & mask) << shift) | ((r2 & mask) << (2 * shift))
+    return (tiled(dim, DIRECTORY_BITS[dim - 2], side, t0, t1, t2),
+            (r0 & mask) | ((r1 & mask) << shift) | ((r2 & mask) << (2 * shift)))
 
 
 @jit
@@ -60,13 +66,33 @@ def _site(points, i, dim, period, q):
 
 
 @jit
+def _ones(word):
+    """How many bits of ``word`` are set (a population count)."""
+    x = word - ((word >> np.uint64(1)) & np.uint64(0x5555555555555555))
+    x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return np.int64((x * np.uint64(0x0101010101010101)) >> np.uint64(56))
+
+
+@jit
+def _below(word, bit):
+    """How many of ``word``'s set bits lie below ``bit``: a site's place among its tile's particles."""
+    return _ones(word & ((np.uint64(1) << np.uint64(bit)) - np.uint64(1)))
+
+
+@jit
 def lattice_parents(points, moves, nseed, period):
     """Each particle's parent (the rule in the module docstring).
 
-    The particles' indices go into tiles of ``TILE_SHIFT`` sites, allocated
-    where there are particles (a dense directory of them over the box):
-    neighbours share a tile or two, so the pass reads memory close to where
-    it last read (a hash table took 3x as long in 2D and 5x in 3D at 1e6: a cache miss per neighbour).
+    The sites are indexed by tiles of ``TILE_SHIFT`` (64 sites): a directory
+    over the box numbers the tiles that hold particles, each such tile has a
+    word of its occupied sites and an offset into one array of the particles'
+    indices in tile order, a site's index at its tile's offset plus the
+    occupied bits below its own. That costs 4 bytes a particle and 16 a tile
+    held, about 5 bytes a particle in all (a dense int32 per site of each
+    tile cost 20 at 10^7), and neighbours share a tile or two, so the pass
+    reads memory close to where it last read (a hash table took 3x as long
+    in 2D and 5x in 3D at 1e6: a cache miss per neighbour).
 
     Parameters
     ----------
@@ -88,34 +114,47 @@ def lattice_parents(points, moves, nseed, period):
     parents = np.full(n, -1, np.int32)
     if n == 0:
         return parents
-    size = 1 << (dim * TILE_SHIFT[dim - 2])
-    lo, tiles = _box(points, dim, period)
-    directory = np.full(tiles[0] * tiles[1] * tiles[2], -1, np.int32)
+    lo, side = _box(points, dim, period)
+    last = (1 << DIRECTORY_BITS[dim - 2]) - 1
+    rounded = ((side + last) >> DIRECTORY_BITS[dim - 2]) << DIRECTORY_BITS[dim - 2]
+    directory = zeroed(rounded ** dim, np.int32)  # a held tile's number + 1; 0: no particle there
+    words = zeroed(n, np.uint64)  # at most a tile a particle; only the tiles held are written
     q = np.zeros(3, np.int64)
-    used = 0
+    held = 0
     for i in range(n):
         _site(points, i, dim, period, q)
-        t, _ = _slot(q[0], q[1], q[2], dim, lo, tiles, directory)
-        if directory[t] < 0:
-            directory[t] = used
-            used += 1
-    index = np.full(used * size, -1, np.int32)
+        t, k = _slot(q[0], q[1], q[2], dim, lo, side)
+        if directory[t] == 0:
+            held += 1
+            directory[t] = held
+        words[directory[t] - 1] |= np.uint64(1) << np.uint64(k)
+    offsets = np.zeros(held + 1, np.int64)
+    for u in range(held):
+        offsets[u + 1] = offsets[u] + _ones(words[u])
+    index = np.empty(n, np.int32)
     for i in range(n):
         _site(points, i, dim, period, q)
-        if i >= nseed and not (period > 0 and q[up] == 0):
-            best = -1
-            for m in range(moves.shape[0]):
-                n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
-                if period > 0:
-                    n0 = n0 % period
-                    if dim == 3:
-                        n1 = n1 % period
-                t, k = _slot(n0, n1, n2, dim, lo, tiles, directory)
-                if t >= 0 and directory[t] >= 0:
-                    j = index[directory[t] * size + k]
-                    if j >= 0 and (best < 0 or j < best):
-                        best = j
-            parents[i] = best
-        t, k = _slot(q[0], q[1], q[2], dim, lo, tiles, directory)
-        index[directory[t] * size + k] = i
+        t, k = _slot(q[0], q[1], q[2], dim, lo, side)
+        u = directory[t] - 1
+        index[offsets[u] + _below(words[u], k)] = i
+    for i in range(nseed, n):
+        _site(points, i, dim, period, q)
+        if period > 0 and q[up] == 0:
+            continue
+        best = -1
+        for m in range(moves.shape[0]):
+            n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+            if period > 0:
+                n0 = n0 % period
+                if dim == 3:
+                    n1 = n1 % period
+            t, k = _slot(n0, n1, n2, dim, lo, side)
+            if t < 0 or directory[t] == 0:
+                continue
+            u = directory[t] - 1
+            if (words[u] >> np.uint64(k)) & np.uint64(1):
+                j = index[offsets[u] + _below(words[u], k)]
+                if j < i and (best < 0 or j < best):
+                    best = j
+        parents[i] = best
     return parents
