@@ -31,9 +31,10 @@ class Cluster:
     points : ndarray, (n_grown, dim)
         Positions in attachment order (int32 on a lattice, float64 off it),
         the seed particle(s) first.
-    steps : ndarray, (n_grown,)
+    steps : ndarray, (n_grown,) uint32
         Diffusion time of each particle: walk steps (or exact jumps) taken by
-        every walker released between the previous attachment and this one.
+        every walker released between the previous attachment and this one
+        (2^32 - 1 means at least that many: ``kernels.model.STEPS_DTYPE``).
     status : str
         ``ok``, ``boundary``, ``step_limit`` or ``exhausted``.
     params : dict

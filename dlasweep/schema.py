@@ -66,6 +66,7 @@ import numpy as np
 
 from . import params as _params
 from .config import LEVEL
+from .kernels.model import STEPS_DTYPE
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -138,7 +139,8 @@ SCHEMA = {
     "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
     **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
                    {"axis": a.upper()}) for a in AXES},
-    "diffusion_time": Variable(("particle",), np.int64, "1", "walk steps (or exact jumps) from release to sticking"),
+    "diffusion_time": Variable(("particle",), STEPS_DTYPE, "1",
+                               "walk steps (or exact jumps) from release to sticking; 4294967295: at least that many"),
     "parent": Variable(("particle",), np.int32, "1",
                        "position in its cluster (0 = first) of the particle this one stuck to; "
                        "-1 = none: a seed particle, or one that stuck to the substrate",
@@ -195,8 +197,8 @@ def ragged_columns(models, dims) -> dict:
     z = 0 plane of 3D columns.
     """
     lattice = bool((np.asarray(models) == "lattice").all())
-    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(np.int64),
-            "parent": np.dtype(SCHEMA["parent"].dtype)}
+    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]},
+            **{name: np.dtype(SCHEMA[name].dtype) for name in ("diffusion_time", "parent")}}
 
 
 BOOLEAN = "false true"

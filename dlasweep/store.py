@@ -123,7 +123,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
         "cluster_particles": ("cluster", np.asarray([len(points)])),
         "status": ("cluster", np.asarray([STATUS_FLAGS.index(cluster.status)], np.int8)),
         **{a: ("particle", _positions(points[:, k])) for k, a in enumerate(AXES[: points.shape[1]])},
-        "diffusion_time": ("particle", np.asarray(cluster.steps, np.int64)),
+        "diffusion_time": ("particle", np.asarray(cluster.steps, SCHEMA["diffusion_time"].dtype)),
         "parent": ("particle", np.asarray(cluster.parents, np.int32)),
     }
     attrs = {

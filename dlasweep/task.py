@@ -76,7 +76,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
             "wall_time": np.where(np.isnan(cluster.times), cluster.seconds, cluster.times),
             "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
             "points": points if stored else points[:0],
-            "diffusion_time": np.asarray(cluster.steps if stored else cluster.steps[:0], np.int64),
+            "diffusion_time": cluster.steps if stored else cluster.steps[:0],
             "parent": np.asarray(cluster.parents if stored else cluster.parents[:0], np.int32),
             "error": np.array(""),
         }

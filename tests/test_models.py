@@ -223,3 +223,11 @@ def test_the_kernels_clock_reads_the_monotonic_clock():
     now = clock()
     after = time.clock_gettime(time.CLOCK_MONOTONIC)
     assert before <= now <= after
+
+
+def test_diffusion_times_are_four_bytes_and_saturate():
+    """A particle's diffusion time is stored in 4 bytes; a count beyond them reads as the largest, not wrapped."""
+    from dlasweep.kernels.model import MOST_STEPS, STEPS_DTYPE, diffusion_time
+    assert [int(diffusion_time(k)) for k in (0, 7, MOST_STEPS - 1, MOST_STEPS, MOST_STEPS + 1, 1 << 40)] == [
+        0, 7, MOST_STEPS - 1, MOST_STEPS, MOST_STEPS, MOST_STEPS]
+    assert dla.grow(300, seed=1).steps.dtype == STEPS_DTYPE == dla.grow(300, seed=1, model="offlattice").steps.dtype

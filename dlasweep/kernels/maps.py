@@ -22,7 +22,7 @@ import sys
 import numpy as np
 from numba import types
 
-from .._jit import jit
+from .._jit import inline, jit
 
 HUGE_PAGE = 2 << 20
 """Size of a transparent huge page (x86-64 and most Linux arm64)."""
@@ -135,7 +135,7 @@ def layout(dim, width, most=64):
     return start, blocks, cells
 
 
-@jit
+@inline
 def tiled(dim, bits, side, i, j, k):
     """Position of cell (i, j, k) of a grid of ``side`` cells a side stored in
     square (cubic) tiles of ``2**bits`` cells a side, tile after tile."""

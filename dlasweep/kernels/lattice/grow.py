@@ -22,7 +22,7 @@ import numpy as np
 from ..._jit import clock, jit
 from .. import maps
 from .. import model as codes
-from ..model import checkpoint, grown, model_from, sticks_xo
+from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
 from ..walk import (
     below,
     direction,
@@ -187,7 +187,7 @@ def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
     up = dim - 1
     for a in range(dim):
         points[count, a] = q[a]
-    steps[count] = pending
+    steps[count] = diffusion_time(pending)
     count += 1
     r_max = max(r_max, np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])))
     h_max = max(h_max, float(q[up]))
@@ -231,7 +231,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     marks : int64 (K,)
         Particle counts at which to read the clock, ascending.
     rng : numpy.random.Generator
-    points : int32 (n, dim), steps : int64 (n,)
+    points : int32 (n, dim), steps : uint32 (n,)
         Filled with the sites and diffusion times of the particles grown.
     times : float64 (K,)
         Filled with the seconds at each mark as it passes.
@@ -626,7 +626,7 @@ def grow_lattice(n, p, marks, rngs, times=None):
     -------
     list, for each generator, of
         points : int32 (n_grown, dim)
-        steps : int64 (n_grown,)
+        steps : uint32 (n_grown,), saturated (``model.diffusion_time``)
         parents : int32 (n_grown,), the particle each one stuck to (``parents.lattice_parents``), -1 for none
         status : int code into ``dlasweep.params.STATUSES``
         times : float64 seconds at each of ``marks`` (NaN when not reached)
@@ -635,7 +635,7 @@ def grow_lattice(n, p, marks, rngs, times=None):
     model = model_from(p)
     moore = model.neighbours != 2 * model.dim
     points = np.zeros((len(rngs), n, model.dim), np.int32)
-    steps = np.zeros((len(rngs), n), np.int64)
+    steps = np.zeros((len(rngs), n), STEPS_DTYPE)
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))

@@ -15,7 +15,7 @@ import numpy as np
 from ..._jit import clock, jit
 from .. import maps
 from .. import model as codes
-from ..model import checkpoint, grown, model_from, sticks
+from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     FS,
@@ -343,7 +343,7 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
         pts[count, a] = w[a]
         r2 += w[a] * w[a]
         ch = max(ch, abs(w[a]))
-    steps[count] = pending
+    steps[count] = diffusion_time(pending)
     parents[count] = parent
     geo[0] = max(geo[0], np.sqrt(r2))
     geo[1] = max(geo[1], ch)
@@ -375,7 +375,7 @@ def _grow(n, model, marks, rng, times):
     Returns
     -------
     points : float64 (n, dim), the first ``count`` rows grown
-    steps : int64 (n,)
+    steps : uint32 (n,)
     parents : int32 (n,)
     count : int
     status : int, a code of ``dlasweep.params.STATUSES``
@@ -386,7 +386,7 @@ def _grow(n, model, marks, rng, times):
     nseed = 0 if line else (1 if seed_shape == codes.POINT else 1 << dim)
     cap = max(n, 1)
     pts = maps.filled(cap * dim, 0.0, np.float64).reshape((cap, dim))
-    steps = maps.filled(cap, 0, np.int64)
+    steps = maps.filled(cap, 0, STEPS_DTYPE)
     parents = maps.filled(cap, -1, np.int32)
     nxt = maps.filled(cap, -1, np.int32)
     count = min(n, nseed)
