@@ -17,8 +17,8 @@ from ._version import __version__
 # (``_entry``) starts before numba and numpy load, so Ctrl-C is one line then too.
 _LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "boxes", "radius_of_gyration": "measure",
          "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
-         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "store", "cluster_parents": "store",
-         "read_cluster": "store", "export_cluster": "export",
+         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "ragged", "cluster_parents": "ragged",
+         "read_cluster": "ragged", "export_cluster": "export",
          "summarise": "analysis", "report": "report"}
 
 

@@ -54,7 +54,7 @@ class DlaAccessor:
         dlasweep.grow.Cluster
             Shown as its picture in a notebook.
         """
-        from .store import read_cluster
+        from .ragged import read_cluster
 
         return read_cluster(self.ds, k, **where)
 

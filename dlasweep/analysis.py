@@ -13,7 +13,8 @@ Every cluster that reached N enters; none is dropped for its own fit.
 Beside it: the local slope D_eff(n) of the same ensemble curve over each
 octave of n with its bootstrap band; D_inf, the extrapolation
 D_eff(n) = D_inf + a n**-w over independent octaves, given only where that
-model describes the data; and the box-counting D (the mean over every
+model describes the data (``extrapolation``); each variant against the
+exact method (``exact``); and the box-counting D (the mean over every
 cluster of its own fit), a finite-cluster estimate that reads low.
 """
 
@@ -26,23 +27,17 @@ import numpy as np
 import xarray as xr
 
 from . import branching
-from .config import MIN_CI_SEEDS, MIN_COUNT, PER_OCTAVE, RESAMPLES
+from .config import LEVEL, MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
+from .exact import against_exact
+from .extrapolation import extrapolate
 from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts,
                   history_counts, mass_radius_counts, seed_interval)
 from .measure import radius_of_gyration
-from .params import EXACT_METHOD, STATUSES
+from .params import STATUSES
+from .ragged import cluster_points
+from .schema import config_dims, plain
 from .selection import with_selected_clusters
 
-EXPONENTS = (0.25, 0.5, 0.75, 1.0)
-"""Correction exponents w tried for D_eff(n) = D_inf + a n**-w."""
-MAX_CHI2 = 2.0
-"""Largest chi-square per degree of freedom at which the correction model describes D_eff."""
-MAX_INF_HALF_WIDTH = 0.05
-"""Widest 95% CI half-width of D_inf worth reporting; wider, the data do not constrain it."""
-MIN_OCTAVES = 4
-"""Fewest independent octaves of D_eff an extrapolation needs."""
-COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
-"""Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
 _MERGE_AT = 1_000_000
@@ -70,8 +65,8 @@ class Summarised:
 _N, _SEEDS = ("n_particles",), ("n_particles", "seed")
 SUMMARY = {
     "D": Summarised(_N, "D, ensemble mass-radius: n ~ <Rg>**D over the seeds that reached N, widest flat window"),
-    "D_ci_lo": Summarised(_N, "lower end of the 95% CI of D (bootstrap over seeds, window fixed)"),
-    "D_ci_hi": Summarised(_N, "upper end of the 95% CI of D (bootstrap over seeds, window fixed)"),
+    "D_ci_lo": Summarised(_N, f"lower end of the {LEVEL} CI of D (bootstrap over seeds, window fixed)"),
+    "D_ci_hi": Summarised(_N, f"upper end of the {LEVEL} CI of D (bootstrap over seeds, window fixed)"),
     "D_range_lo": Summarised(_N, "smallest particle count of the fitted window"),
     "D_range_hi": Summarised(_N, "largest particle count of the fitted window"),
     "D_drift": Summarised(_N, "change of the local slope of the ensemble curve across the fitted window"),
@@ -79,32 +74,32 @@ SUMMARY = {
     "D_seeds": Summarised(_N, "clusters that reached N and enter D", np.int64, 0),
     "D_seed_std": Summarised(_N, "standard deviation over seeds of the per-cluster mass-radius D"),
     "D_box": Summarised(_N, "box-counting D, mean of the per-cluster fits of every cluster that reached N (reads low)"),
-    "D_box_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of D_box"),
-    "D_box_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of D_box"),
+    "D_box_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of D_box"),
+    "D_box_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of D_box"),
     "D_box_ok_fraction": Summarised(_N, "fraction of those clusters whose own box-counting fit is flat"),
     "rg_mean": Summarised(_N, "mean radius of gyration over the seeds that reached N"),
-    "rg_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_mean"),
-    "rg_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_mean"),
+    "rg_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of rg_mean"),
+    "rg_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of rg_mean"),
     "rg_over_rmax": Summarised(_N, "mean of Rg / R_max over the seeds that reached N"),
-    "rg_over_rmax_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of rg_over_rmax"),
-    "rg_over_rmax_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of rg_over_rmax"),
+    "rg_over_rmax_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of rg_over_rmax"),
+    "rg_over_rmax_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of rg_over_rmax"),
     "anisotropy": Summarised(_N,
                              "mean over the seeds that reached N of the cubic anisotropy of the outer half of the "
                              "mass"),
-    "anisotropy_ci_lo": Summarised(_N, "lower end of the bootstrap 95% CI of anisotropy"),
-    "anisotropy_ci_hi": Summarised(_N, "upper end of the bootstrap 95% CI of anisotropy"),
+    "anisotropy_ci_lo": Summarised(_N, f"lower end of the bootstrap {LEVEL} CI of anisotropy"),
+    "anisotropy_ci_hi": Summarised(_N, f"upper end of the bootstrap {LEVEL} CI of anisotropy"),
     "seconds_per_particle": Summarised(_N, "mean wall time per particle to grow to N"),
     "steps_per_particle": Summarised(_N, "mean walk steps per particle to grow to N"),
     "pareto": Summarised(_N,
                          "on the Pareto front of cost per particle against the bound on |Rg/Rg(exact) - 1| (1) or not "
                          "(0)", np.int8, 0),
     "D_vs_exact": Summarised(_N, "D minus D of the exact method (other parameters equal) at equal N"),
-    "D_vs_exact_half_width": Summarised(_N, "95% CI half-width of D_vs_exact (both CIs in quadrature)"),
+    "D_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of D_vs_exact (both CIs in quadrature)"),
     "rg_mean_vs_exact": Summarised(_N, "rg_mean over rg_mean of the exact method, minus 1, at equal N"),
-    "rg_mean_vs_exact_half_width": Summarised(_N, "95% CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
+    "rg_mean_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
     "rg_over_rmax_vs_exact": Summarised(_N, "rg_over_rmax minus that of the exact method at equal N"),
     "rg_over_rmax_vs_exact_half_width": Summarised(_N,
-                                                   "95% CI half-width of rg_over_rmax_vs_exact (both CIs in "
+                                                   f"{LEVEL} CI half-width of rg_over_rmax_vs_exact (both CIs in "
                                                    "quadrature)"),
     "D_cluster": Summarised(_SEEDS, "mass-radius D of one cluster's own growth history up to N"),
     "D_cluster_ok": Summarised(_SEEDS, "whether that cluster's fit is flat (1) or not (0)", np.int8, 0),
@@ -123,14 +118,14 @@ SUMMARY = {
                                    "median diffusion time of the particles that stuck at that depth, pooled over the "
                                    "stored clusters"),
     "D_local": Summarised(("n_local",), "local slope D_eff: d ln n / d ln <Rg> over one octave of n, ensemble curve"),
-    "D_local_ci_lo": Summarised(("n_local",), "lower end of the bootstrap 95% band of D_local"),
-    "D_local_ci_hi": Summarised(("n_local",), "upper end of the bootstrap 95% band of D_local"),
+    "D_local_ci_lo": Summarised(("n_local",), f"lower end of the bootstrap {LEVEL} band of D_local"),
+    "D_local_ci_hi": Summarised(("n_local",), f"upper end of the bootstrap {LEVEL} band of D_local"),
     "rg_history": Summarised(("n_history",),
                              "mean radius of gyration over the seeds that reached the largest count, along their "
                              "growth"),
     "D_inf": Summarised((), "D extrapolated to infinite N: D_eff(n) = D_inf + a n**-w over independent octaves"),
-    "D_inf_ci_lo": Summarised((), "lower end of the bootstrap 95% CI of D_inf"),
-    "D_inf_ci_hi": Summarised((), "upper end of the bootstrap 95% CI of D_inf"),
+    "D_inf_ci_lo": Summarised((), f"lower end of the bootstrap {LEVEL} CI of D_inf"),
+    "D_inf_ci_hi": Summarised((), f"upper end of the bootstrap {LEVEL} CI of D_inf"),
     "D_inf_exponent": Summarised((), "correction exponent w of the extrapolation"),
     "D_inf_range_lo": Summarised((), "smallest count of the octaves the extrapolation uses"),
     "status_count": Summarised(("n_particles", "status"), "clusters with each growth status at N", np.int64, 0),
@@ -139,11 +134,11 @@ SUMMARY = {
                                 "none", np.int64, -1),
     "D_reason": Summarised(_N, "why D_ok is 0; empty otherwise", str),
     "D_ci_reason": Summarised(_N,
-                              "why D has no 95% CI (and no other interval over seeds is given); empty otherwise", str),
+                              f"why D has no {LEVEL} CI (and no other interval over seeds is given); empty otherwise", str),
     "D_inf_reason": Summarised((), "why D_inf is not given; empty otherwise", str),
 }
 """Every variable of ``summarise``'s dataset, in its order: the one place its dims, type and
-long name are spelled (as ``store.SCHEMA`` spells the stored ones)."""
+long name are spelled (as ``schema.SCHEMA`` spells the stored ones)."""
 
 
 def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
@@ -170,73 +165,9 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
     out = {name: var.blank(sweep.shape + tuple(sweep.extra[d] for d in var.dims)) for name, var in SUMMARY.items()}
     for config in np.ndindex(*sweep.shape):
         _config(sweep, config, out, resamples)
-    _against_exact(sweep, out)
+    against_exact(sweep.ds, out)
     return sweep.dataset(out, resamples).merge(branching.summary(sweep.ds, sweep.config_dims, sweep.clusters,
                                                                  MIN_CI_SEEDS))
-
-
-def config_dims(ds) -> list:
-    """The dims that name a configuration of a sweep: the swept parameters (spec order), then ``size``."""
-    return [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
-
-
-def method_axes(ds) -> list:
-    """The swept parameters that switch an approximation on or off (``EXACT_METHOD``'s, with several values)."""
-    return [name for name in EXACT_METHOD if name in config_dims(ds) and ds.sizes[name] > 1]
-
-
-def exact_reference(ds, config):
-    """The configuration (indices on ``config_dims``) with every method axis at its exact value, or None."""
-    dims = config_dims(ds)
-    reference = list(config)
-    for name in method_axes(ds):
-        exact = [i for i, v in enumerate(ds[name].values) if _key(v) == EXACT_METHOD[name]]
-        if not exact:
-            return None
-        reference[dims.index(name)] = exact[0]
-    return tuple(reference)
-
-
-def _against_exact(sweep, out):
-    """Each configuration's departure from the exact method at equal N, with its 95% CI half-width."""
-    if not method_axes(sweep.ds):
-        return
-    for config in np.ndindex(*sweep.shape):
-        ref = exact_reference(sweep.ds, config)
-        if ref is None:
-            continue
-        if ref == config:
-            for name in COMPARED:
-                out[f"{name}_vs_exact"][config] = out[f"{name}_vs_exact_half_width"][config] = 0.0
-            continue
-        for name, relative in COMPARED.items():
-            stem = "rg" if name == "rg_mean" else name
-            value, base = out[name][config], out[name][ref]
-            half, base_half = ((out[f"{stem}_ci_hi"][c] - out[f"{stem}_ci_lo"][c]) / 2 for c in (config, ref))
-            if relative:
-                out[f"{name}_vs_exact"][config] = value / base - 1
-                out[f"{name}_vs_exact_half_width"][config] = value / base * np.hypot(half / value, base_half / base)
-            else:
-                out[f"{name}_vs_exact"][config] = value - base
-                out[f"{name}_vs_exact_half_width"][config] = np.hypot(half, base_half)
-    _pareto(sweep, out)
-
-
-def _pareto(sweep, out):
-    """Mark, at each count, the configurations no other beats on both cost and accuracy.
-
-    Accuracy is the bound |Rg/Rg(exact) - 1| + its CI half-width (Rg at equal
-    N separates the methods more sharply than D); the exact method's bound is 0.
-    """
-    cost = out["seconds_per_particle"].reshape(-1, sweep.n_counts)
-    bound = (np.abs(out["rg_mean_vs_exact"]) + out["rg_mean_vs_exact_half_width"]).reshape(-1, sweep.n_counts)
-    front = np.zeros_like(cost)
-    for k in range(sweep.n_counts):
-        c, b = cost[:, k], bound[:, k]
-        for i in np.flatnonzero(np.isfinite(c) & np.isfinite(b)):
-            beaten = (c <= c[i]) & (b <= b[i]) & ((c < c[i]) | (b < b[i]))
-            front[i, k] = not beaten.any()
-    out["pareto"][...] = front.reshape(out["pareto"].shape)
 
 
 class _Sweep:
@@ -252,6 +183,7 @@ class _Sweep:
         self.history = history_counts(int(self.counts[-1]))
         octave = [np.flatnonzero((self.history >= h) & (self.history <= 2 * h)) for h in self.history]
         self.octaves = [o for o in octave if len(o) >= 2 and self.history[o[-1]] >= 1.9 * self.history[o[0]]]
+        self.centres = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
         self.clusters = self._cluster_index() if "cluster_particles" in ds else {}
         self.offsets = np.r_[0, np.cumsum(ds["cluster_particles"].values)] if self.clusters else None
         # Files written before the growth history was recorded: the stored clusters give it.
@@ -316,10 +248,10 @@ class _Sweep:
     def _cluster_index(self):
         """(configuration, seed index) -> position on ``cluster``."""
         ds = self.ds
-        lookup = {d: {_key(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
+        lookup = {d: {plain(v): i for i, v in enumerate(ds[d].values)} for d in (*self.config_dims, "seed")}
         where = {}
         for i in range(ds.sizes["cluster"]):
-            at = tuple(lookup[d][_key(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
+            at = tuple(lookup[d][plain(ds[f"cluster_{d}"].values[i])] for d in (*self.config_dims, "seed"))
             where[at[:-1], at[-1]] = i
         return where
 
@@ -328,8 +260,6 @@ class _Sweep:
         i = self.clusters.get((config, seed))
         if i is None or self.ds["cluster_particles"].values[i] < 1:
             return None
-        from .store import cluster_points  # here, so that the analysis of a curve needs no netCDF
-
         return cluster_points(self.ds, i).astype(np.float64)
 
     def times(self, config, seed):
@@ -347,14 +277,14 @@ class _Sweep:
             data[name] = ((*self.config_dims, *var.dims), values, {"long_name": var.long_name})
         coords = {d: ds[d].values for d in (*self.config_dims, "n_particles", "seed")}
         coords["n_history"] = self.history
-        coords["n_local"] = np.array([np.exp(np.log(self.history[o]).mean()) for o in self.octaves])
+        coords["n_local"] = self.centres
         coords["status"] = np.array(STATUSES, object)
         coords["scale_mid"] = np.sqrt(self.scales[1:] * self.scales[:-1])
         coords["diffusion_bin"] = np.sqrt(self.time_edges[1:] * self.time_edges[:-1])
         coords["depth_bin"] = (DEPTH_EDGES[1:] + DEPTH_EDGES[:-1]) / 2
         return xr.Dataset(data, coords=coords, attrs={
             "title": "dlasweep summary: fractal dimension of every configuration",
-            "interval": "every interval is a 95% confidence interval over seeds (Student's t: of the mean, or "
+            "interval": f"every interval is a {LEVEL} confidence interval over seeds (Student's t: of the mean, or "
                         f"on a bootstrap's spread), given where at least {MIN_CI_SEEDS} clusters enter",
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
             "bootstrap_resamples": resamples,
@@ -482,7 +412,7 @@ def _headline(curves, counts, rng, resamples):
 
 def too_few(n) -> str:
     """Why a statistic over ``n`` clusters has no interval (``MIN_CI_SEEDS``)."""
-    return (f"{n} cluster{'s' * (n != 1)} reached N, fewer than the {MIN_CI_SEEDS} a 95% CI needs "
+    return (f"{n} cluster{'s' * (n != 1)} reached N, fewer than the {MIN_CI_SEEDS} a {LEVEL} CI needs "
             "(over fewer, the spread over seeds is too poorly known)")
 
 
@@ -543,53 +473,11 @@ def _local(sweep, config, curves, out, resamples):
     boot = np.log(bootstrap_means(curves, _stream("D_local", sweep.counts[-1]), resamples))
     band = np.array([_slopes(boot[:, w], log_n[w]) for w in sweep.octaves])
     o["D_local_ci_lo"][:], o["D_local_ci_hi"][:] = seed_interval(local, band, len(curves), axis=1)
-    _extrapolate(sweep, o, local, band, len(curves))
-
-
-def _extrapolate(sweep, o, local, band, n_seeds):
-    """D_inf from D_eff(n) = D_inf + a n**-w over independent (non-overlapping) octaves (``band``: the
-    bootstrap of D_eff over ``n_seeds`` clusters)."""
-    step = PER_OCTAVE
-    pick = np.arange(len(local) - 1, -1, -step)[::-1]  # back from the largest octave
-    centres = np.array([np.exp(np.log(sweep.history[sweep.octaves[i]]).mean()) for i in pick])
-    y, boot = local[pick], band[pick]
-    sigma = boot.std(axis=1, ddof=1)
-    if len(pick) < MIN_OCTAVES:
-        o["D_inf_reason"][()] = f"{len(pick)} independent octaves of D_eff, need {MIN_OCTAVES}"
-        return
-    best = None
-    # The smallest octaves are the transient: start as low as the model allows.
-    for start in range(len(pick) - MIN_OCTAVES + 1):
-        for w in EXPONENTS:
-            design = np.c_[np.ones(len(pick) - start), centres[start:] ** -w]
-            weights = 1 / sigma[start:]
-            coef, *_ = np.linalg.lstsq(design * weights[:, None], y[start:] * weights, rcond=None)
-            chi2 = (((design @ coef - y[start:]) * weights) ** 2).sum() / (len(design) - 2)
-            if chi2 <= MAX_CHI2 and (best is None or chi2 < best[0]):
-                best = (chi2, start, w, design, weights, coef)
-        if best is not None:
-            break
-    if best is None:
-        o["D_inf_reason"][()] = (f"D_eff(n) is not D_inf + a n^-w for any w in {EXPONENTS} "
-                                 f"(chi2/dof > {MAX_CHI2:g} over every range of {MIN_OCTAVES} octaves)")
-        return
-    _, start, w, design, weights, coef = best
-    solve = np.linalg.pinv(design * weights[:, None])
-    values = solve[0] @ (boot[start:] * weights[:, None])
-    lo, hi = seed_interval(coef[0], values, n_seeds)
-    if (hi - lo) / 2 > MAX_INF_HALF_WIDTH:
-        o["D_inf_reason"][()] = f"extrapolation too uncertain (95% CI half-width {(hi - lo) / 2:.3f})"
-        return
-    o["D_inf"][()], o["D_inf_ci_lo"][()], o["D_inf_ci_hi"][()] = coef[0], lo, hi
-    o["D_inf_exponent"][()], o["D_inf_range_lo"][()] = w, centres[start]
+    for name, value in extrapolate(sweep.centres, local, band, len(curves)).items():
+        o[name][()] = value
 
 
 def _slopes(log_rg, log_n):
     """Least-squares slope of log_n on each row of log_rg."""
     x = log_rg - log_rg.mean(axis=-1, keepdims=True)
     return (x * (log_n - log_n.mean())).sum(axis=-1) / (x * x).sum(axis=-1)
-
-
-def _key(value):
-    """A hashable, type-stable form of a coordinate value (bools and numpy scalars)."""
-    return value.item() if hasattr(value, "item") else value

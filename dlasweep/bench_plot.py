@@ -1,6 +1,6 @@
 """The benchmark's chart: kernel time against N, log-log, one line per model (``dlasweep bench``'s ``bench.png``).
 
-Drawn in the report's style (``report.new_figure``); reads what
+Drawn in the report's style (``figures.new_figure``); reads what
 ``bench.run_bench`` measured and computes nothing.
 """
 
@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from .bench import exponent_attribute
-from .readout import plain
-from .report import colour_of, new_figure, save_figure
+from .schema import plain
+from .figures import colour_of, new_figure, save_figure
 
 
 def plot_bench(ds, outdir) -> Path:

@@ -12,20 +12,22 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .config import LEVEL
 from .fit import ensemble
+from .ragged import cluster_parents
 from .tree import MIN_BRANCHES, branching
 
 ATTRS = {
     "bifurcation_ratio": "Horton-Strahler bifurcation ratio R_b = N_k / N_(k+1), mean over the stored clusters of "
                          f"each cluster's fit of ln N_k against k over the orders with at least {MIN_BRANCHES} "
                          "branches, largest count",
-    "bifurcation_ratio_ci_lo": "lower end of the 95% CI of bifurcation_ratio (Student's t over clusters)",
-    "bifurcation_ratio_ci_hi": "upper end of the 95% CI of bifurcation_ratio (Student's t over clusters)",
+    "bifurcation_ratio_ci_lo": f"lower end of the {LEVEL} CI of bifurcation_ratio (Student's t over clusters)",
+    "bifurcation_ratio_ci_hi": f"upper end of the {LEVEL} CI of bifurcation_ratio (Student's t over clusters)",
     "bifurcation_ratio_cluster": "bifurcation ratio of one stored cluster",
     "chemical_dimension": "chemical-distance dimension d_l: particles within l bonds of the seed ~ l**d_l, "
                           "mean over the stored clusters",
-    "chemical_dimension_ci_lo": "lower end of the 95% CI of chemical_dimension (Student's t over clusters)",
-    "chemical_dimension_ci_hi": "upper end of the 95% CI of chemical_dimension (Student's t over clusters)",
+    "chemical_dimension_ci_lo": f"lower end of the {LEVEL} CI of chemical_dimension (Student's t over clusters)",
+    "chemical_dimension_ci_hi": f"upper end of the {LEVEL} CI of chemical_dimension (Student's t over clusters)",
     "branch_count": "number of branches of each Horton-Strahler order, mean over the stored clusters (0 where a "
                     "cluster has no branch of that order)",
     "branch_clusters": "stored clusters with parents that enter the branch statistics",
@@ -40,7 +42,7 @@ def summary(ds, config_dims, clusters, min_seeds) -> xr.Dataset:
     ds : xarray.Dataset
         The sweep (a selection's clusters only: ``selection.with_selected_clusters``).
     config_dims : list of str
-        The configuration dims (``analysis.config_dims``).
+        The configuration dims (``schema.config_dims``).
     clusters : dict
         (configuration index tuple, seed index) -> position on ``cluster``.
     min_seeds : int
@@ -48,8 +50,6 @@ def summary(ds, config_dims, clusters, min_seeds) -> xr.Dataset:
     """
     if "parent" not in ds.variables or not clusters:
         return xr.Dataset()
-    from .store import cluster_parents  # here, so that the statistics of a tree need no netCDF
-
     shape = tuple(ds.sizes[d] for d in config_dims)
     n_seeds = ds.sizes["seed"]
     ratio = np.full((*shape, n_seeds), np.nan)

@@ -24,20 +24,17 @@ from pathlib import Path
 from . import export as _export
 from . import params as _params
 from . import plan as _plan
-from . import info, slurm, store
+from . import info, ragged, slurm, store
 from ._version import __version__
-from .grow import compiled, grow
-from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size, draw_cluster
+from .grow import grow
+from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
+from .progress import follow, growth_bar, steps_bar
 from .report import ReportFolderError, earlier_report, report
 from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .store import one_line as _one_line
 from .parts import Interrupted, ResumeError
 from .sweep import embedded_threads, run_sweep, scheduler_address
 
-PICTURES = (".png", ".svg")
-GROW_SUFFIXES = (".nc", *PICTURES, *(s for s in _export.FORMATS if s not in PICTURES))
-MESH_FILES = (".ply", ".obj")
-STYLES = ("disks", "tree")
 
 
 class UsageError(ValueError):
@@ -118,7 +115,7 @@ def _parser() -> argparse.ArgumentParser:
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
     one.add_argument("-o", "--output", required=True, type=Path,
-                     help="output file: " + ", ".join(GROW_SUFFIXES))
+                     help="output file: " + ", ".join(_export.SUFFIXES))
     one.add_argument("--force", action="store_true", help="replace the output file if it exists")
     _output_options(one)
     one.set_defaults(handler=_grow)
@@ -129,7 +126,7 @@ def _parser() -> argparse.ArgumentParser:
     out.add_argument("--cluster", type=_params.integer, required=True, metavar="K",
                      help="the cluster's position in the file (0 first; `dlasweep info` counts them)")
     out.add_argument("-o", "--output", required=True, type=Path,
-                     help="output file: " + ", ".join(GROW_SUFFIXES))
+                     help="output file: " + ", ".join(_export.SUFFIXES))
     out.add_argument("--force", action="store_true", help="replace the output file if it exists")
     _output_options(out)
     out.set_defaults(handler=_export_cluster)
@@ -181,7 +178,7 @@ def _output_options(command):
     look.add_argument("--dpi", type=float, help=f"dots per inch (default: whole pixels per lattice site, a panel "
                                                 f"at least {PANEL_PIXELS} and the picture at most {MAX_PIXELS} "
                                                 f"pixels wide)")
-    look.add_argument("--style", choices=STYLES,
+    look.add_argument("--style", choices=_export.STYLES,
                       help="disks: the particles, coloured by attachment order (default); tree: one line per "
                            "Horton-Strahler branch, wider by order (.svg: vector paths for a plotter or a cutter)")
     shape = command.add_argument_group("meshes (.ply, .obj)")
@@ -192,10 +189,11 @@ def _output_options(command):
 def _output(args, out) -> dict:
     """The checked options of the output file ``out`` (``_output_options``): refused where they do not apply."""
     suffix = out.suffix.lower()
-    if suffix not in GROW_SUFFIXES:
-        raise UsageError(f"-o {out}: expected a file ending in {', '.join(GROW_SUFFIXES)}")
-    for option, given, where in (("--size-inches", args.size_inches, PICTURES), ("--dpi", args.dpi, PICTURES),
-                                 ("--style", args.style, PICTURES), ("--mesh", args.mesh, MESH_FILES)):
+    if suffix not in _export.SUFFIXES:
+        raise UsageError(f"-o {out}: expected a file ending in {', '.join(_export.SUFFIXES)}")
+    for option, given, where in (("--size-inches", args.size_inches, _export.PICTURES),
+                                 ("--dpi", args.dpi, _export.PICTURES), ("--style", args.style, _export.PICTURES),
+                                 ("--mesh", args.mesh, _export.MESH_FILES)):
         if given is not None and suffix not in where:
             raise UsageError(f"{option}: applies to {', '.join(where)} files, not to {out}")
     picture = {"inches": DEFAULT_INCHES if args.size_inches is None else args.size_inches, "dpi": args.dpi}
@@ -204,25 +202,7 @@ def _output(args, out) -> dict:
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the argument's name
         raise UsageError(f"{'--size-inches' if name == 'inches' else '--dpi'}:{reason}") from None
-    return {"picture": picture, "style": args.style or STYLES[0], "mesh": args.mesh or _export.MESHES[0]}
-
-
-def _write_cluster(cluster, out, seed, how):
-    """Save, draw or export one cluster to ``out`` as its extension and ``how`` (``_output``) say."""
-    suffix = out.suffix.lower()
-    if suffix == ".nc":
-        store.save(store.cluster_dataset(cluster, seed), out)
-    elif suffix in PICTURES and how["style"] == "tree":
-        if suffix == ".svg":
-            _export.export_cluster(cluster, out)
-        else:
-            from .tree_picture import draw_tree  # here: only a tree's picture needs it
-
-            draw_tree(cluster, out, seed=seed, **how["picture"])
-    elif suffix in PICTURES:
-        draw_cluster(cluster.points, cluster.params, out, seed=seed, status=cluster.status, **how["picture"])
-    else:
-        _export.export_cluster(cluster, out, mesh=how["mesh"])
+    return {"picture": picture, "style": args.style or _export.STYLES[0], "mesh": args.mesh or _export.MESHES[0]}
 
 
 def _export_cluster(args) -> int:
@@ -236,15 +216,12 @@ def _export_cluster(args) -> int:
         if not 0 <= args.cluster < count:
             raise UsageError(f"--cluster: {args.cluster} is not in [0, {count - 1}]" if count else
                              f"--cluster: {args.dataset} stores no cluster")
-        cluster = store.read_cluster(ds, args.cluster)
+        cluster = ragged.read_cluster(ds, args.cluster)
         seed = int(ds["cluster_seed"].values[args.cluster])
-    suffix = out.suffix.lower()
-    tree = suffix == ".csv" or (suffix in PICTURES and how["style"] == "tree") or (suffix in MESH_FILES
-                                                                                  and how["mesh"] == "tubes")
-    if tree and cluster.parents is None:
+    if _export.needs_parents(out, how["style"], how["mesh"]) and cluster.parents is None:
         raise UsageError(f"{args.dataset}: holds no parents (written before dlasweep stored them); "
                          f"{out.suffix} needs them")
-    _write_cluster(cluster, out, seed, how)
+    _export.write_cluster(cluster, out, seed, **how)
     print(f"{out}: cluster {args.cluster}, {cluster.n} particles")
     return 0
 
@@ -273,48 +250,14 @@ def _grow(args) -> int:
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
         raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
-    with _growth_bar(args.n, resolved["model"]) as bar:
+    with growth_bar(args.n, resolved["model"]) as bar:
         progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
         cluster = grow(args.n, args.seed, progress=progress, **resolved)
     if cluster.status != _params.Status.ok.name:
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
-    _write_cluster(cluster, out, args.seed, how)
+    _export.write_cluster(cluster, out, args.seed, **how)
     print(f"{out}: {cluster.n} particles")
     return 0
-
-
-def _growth_bar(n, model):
-    """A progress bar for ``grow`` on a terminal (particles, rate, time left), else ``nullcontext(None)``.
-
-    Announces first that the kernels compile when numba's cache lacks them.
-    The bar shows once growth has taken a second: small clusters print nothing more.
-    """
-    if not sys.stderr.isatty():
-        return contextlib.nullcontext()
-    if not compiled(model):
-        _say("dlasweep grow: compiling kernels (once)")
-    from tqdm import tqdm
-
-    return tqdm(total=n, unit=" particles", unit_scale=True, desc="grow", file=sys.stderr, delay=1.0, leave=False)
-
-
-def _steps_bar(desc):
-    """A progress bar of named steps on a terminal (shown after a second), else ``nullcontext(None)``."""
-    if not sys.stderr.isatty():
-        return contextlib.nullcontext()
-    from tqdm import tqdm
-
-    return tqdm(desc=desc, unit="step", file=sys.stderr, delay=1.0, leave=False,
-                bar_format="{desc}: {n}/{total} [{elapsed}<{remaining}]{postfix}")
-
-
-def _follow(bar):
-    """``progress(done, steps, name)`` that moves ``bar`` to step ``done`` of ``steps``, named."""
-    def progress(done, steps, name):
-        bar.total = steps
-        bar.set_postfix_str(name, refresh=False)
-        bar.update(done - bar.n)
-    return progress
 
 
 def _sweep_target(args) -> tuple:
@@ -457,8 +400,8 @@ def _report(args) -> int:
         ds.close()
         raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
     try:
-        with _steps_bar("report") as bar:
-            report(ds, outdir, progress=None if bar is None else _follow(bar))
+        with steps_bar("report") as bar:
+            report(ds, outdir, progress=None if bar is None else follow(bar))
     finally:
         ds.close()
     print(f"{outdir}: report written")

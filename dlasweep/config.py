@@ -6,6 +6,8 @@ samples reads these (``fit``, ``analysis``, the report's words about them).
 
 CONFIDENCE = 0.95
 """Level of every interval: fits' CIs, intervals over seeds, bootstrap bands."""
+LEVEL = f"{CONFIDENCE:.0%}"
+"""``CONFIDENCE`` as the words, labels and long names say it ("95%")."""
 
 RESAMPLES = 1000
 """Bootstrap resamples over seeds. Each interval draws its own stream (``analysis``), so that

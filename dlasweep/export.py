@@ -31,6 +31,12 @@ from .tree import branch_paths, strahler
 
 FORMATS = (".csv", ".ply", ".obj", ".svg")
 MESHES = ("spheres", "tubes")
+PICTURES = (".png", ".svg")
+SUFFIXES = (".nc", *PICTURES, *(s for s in FORMATS if s not in PICTURES))
+"""Every file a cluster is written to (``write_cluster``): a dataset, a picture, a table or a mesh."""
+MESH_FILES = (".ply", ".obj")
+STYLES = ("disks", "tree")
+"""How a picture shows a cluster: its particles, or its tree (one line per Horton-Strahler branch)."""
 CHUNK = 1 << 16
 """Particles turned into text or bytes at a time (a sixteenth of it for meshes: 12 vertices and
 20 faces a particle): 1e6 particles to .ply peak at 8 MB of memory besides the cluster, to .csv at 18 MB."""
@@ -56,7 +62,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
     path : str or Path
         Ending in .csv, .ply, .obj or .svg.
     cluster : int, optional
-        With a dataset: which cluster (``store.cluster_points``'s index).
+        With a dataset: which cluster (``ragged.cluster_points``'s index).
     mesh : {"spheres", "tubes"}
         What a .ply or .obj file draws.
 
@@ -74,7 +80,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
     path = Path(path)
     check(path, mesh)
     if not hasattr(source, "points"):
-        from .store import read_cluster  # here, so that exporting a grown cluster needs no netCDF
+        from .ragged import read_cluster  # here, so that exporting a grown cluster needs no xarray
 
         if cluster is None:
             raise TypeError("cluster: give the index of the stored cluster to export")
@@ -92,6 +98,42 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
     return path
+
+
+def write_cluster(cluster, path, seed=0, *, style="disks", mesh="spheres", picture=None):
+    """Write one cluster to ``path`` as its extension (one of ``SUFFIXES``) says.
+
+    ``.nc``: the dataset of one cluster (``store.cluster_dataset``); ``.png``
+    and ``.svg``: its picture in ``style`` (``picture``: ``inches`` and
+    ``dpi``, as ``pictures.draw_cluster``; a tree's ``.svg`` is the vector
+    paths ``export_cluster`` writes); ``.csv``, ``.ply``, ``.obj``:
+    ``export_cluster`` (``mesh`` for the meshes).
+    """
+    path, picture = Path(path), picture or {}
+    suffix = path.suffix.lower()
+    if suffix == ".nc":
+        from .store import cluster_dataset, save  # here: only a dataset needs netCDF
+
+        save(cluster_dataset(cluster, seed), path)
+    elif suffix in PICTURES and style == "tree":
+        if suffix == ".svg":
+            export_cluster(cluster, path)
+        else:
+            from .tree_picture import draw_tree  # here: only a tree's picture needs it
+
+            draw_tree(cluster, path, seed=seed, **picture)
+    elif suffix in PICTURES:
+        from .pictures import draw_cluster  # here: only a picture needs matplotlib
+
+        draw_cluster(cluster.points, cluster.params, path, seed=seed, status=cluster.status, **picture)
+    else:
+        export_cluster(cluster, path, mesh=mesh)
+
+
+def needs_parents(path, style="disks", mesh="spheres") -> bool:
+    """Whether ``write_cluster`` needs the cluster's parents for ``path``: a table, a tree, tubes."""
+    suffix = Path(path).suffix.lower()
+    return suffix == ".csv" or (suffix in PICTURES and style == "tree") or (suffix in MESH_FILES and mesh == "tubes")
 
 
 def check(path, mesh="spheres"):

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import params, store
+from . import params, ragged, schema
 from .analysis import summarise
 from .bench import exponent_attribute
+from .config import LEVEL
 from .fit import fit_mass_radius
 from .measure import radius_of_gyration
 
@@ -33,7 +34,7 @@ def _sweep(ds) -> list:
     tally = full["status_count"].sum([d for d in full["status_count"].dims if d not in ("n_particles", "status")])
     for n in ds["n_particles"].values:
         counts = tally.sel(n_particles=n).values
-        lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(store.STATUS_FLAGS, counts) if k))
+        lines.append(f"  {n:>10}: " + ", ".join(f"{flag} {k}" for flag, k in zip(schema.STATUS_FLAGS, counts) if k))
     failed = [task for task in ds.attrs.get("failed_tasks", "").split("; ") if task]
     lines += [f"failed tasks: {len(failed) or 'none'}", *(f"  {task}" for task in failed)]
     if "stop_reason" in ds.attrs:
@@ -42,7 +43,7 @@ def _sweep(ds) -> list:
 
     summary = full.isel(n_particles=-1)
     config = list(summary["D_inf"].dims)
-    header = [*config, "N", "seeds", "D", "95% CI", "D_inf"]
+    header = [*config, "N", "seeds", "D", f"{LEVEL} CI", "D_inf"]
     rows = []
     for index in np.ndindex(summary["D_inf"].shape):
         at = summary.isel(dict(zip(config, index)))
@@ -51,19 +52,19 @@ def _sweep(ds) -> list:
         rows.append([*(params.text(at[name].values) for name in config), str(int(at["n_particles"])),
                      str(int(at["D_seeds"])), _number(at["D"]),
                      f"[{_number(at['D_ci_lo'])}, {_number(at['D_ci_hi'])}]", d_inf])
-    return [*lines, "headline D at the largest N (ensemble mass-radius, 95% CI over seeds):",
+    return [*lines, f"headline D at the largest N (ensemble mass-radius, {LEVEL} CI over seeds):",
             *_table(header, rows)]
 
 
 def _cluster(ds) -> list:
     """What ``info`` says of one grown cluster: parameters, particles, status, its own D."""
-    points = store.cluster_points(ds, 0)
+    points = ragged.cluster_points(ds, 0)
     fit = fit_mass_radius(radius_of_gyration(points))
     window = f"n in [{fit.range_lo:g}, {fit.range_hi:g}]" if fit.ok else f"not flat: {fit.reason}"
     return [f"seed: {ds.attrs['seed']}",
             "parameters: " + " ".join(f"{name}={params.text(ds[name].values)}" for name in params.PARAMETERS),
-            f"particles: {len(points)}, status {store.STATUS_FLAGS[int(ds['status'][0])]}",
-            f"D of this cluster (mass-radius, 95% CI): {_number(fit.D)} "
+            f"particles: {len(points)}, status {schema.STATUS_FLAGS[int(ds['status'][0])]}",
+            f"D of this cluster (mass-radius, {LEVEL} CI): {_number(fit.D)} "
             f"[{_number(fit.ci_lo)}, {_number(fit.ci_hi)}], {window}"]
 
 

@@ -201,7 +201,7 @@ PARAMETERS = {
 """Every model parameter a cluster depends on (README, "The model"), once: its type,
 default, allowed values, checks, meaning and units. ``resolve``, ``coerce``, the
 command line's options and help (``cli``), the spec's checks (``spec``, through
-``resolve``), the dataset's attributes (``store.SCHEMA``) and the README's table
+``resolve``), the dataset's attributes (``schema.SCHEMA``) and the README's table
 (``markdown_table``, checked by a test) derive from it."""
 
 DEFAULTS = {name: p.default for name, p in PARAMETERS.items()}

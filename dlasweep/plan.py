@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import store
+from . import schema
 from .fit import growth_counts
 from .spec import Spec, SpecError
 from .task import sweep_scales
@@ -87,7 +87,7 @@ def plan(spec: Spec, threads: int) -> Plan:
     stored_seeds = seeds if spec.store_clusters is None else min(spec.store_clusters, seeds)
     resolved = spec.parameters
     models, dims = [p["model"] for p in resolved], [p["dim"] for p in resolved]
-    columns = store.ragged_columns(models, dims)
+    columns = schema.ragged_columns(models, dims)
     per_particle = sum(np.dtype(dtype).itemsize for dtype in columns.values())
     largest = max(KERNEL_BYTES[p["model"], p["dim"]] + MEASURE_COPIES * per_particle for p in resolved)
     measures = clusters * _measure_bytes(spec)
@@ -99,12 +99,12 @@ def plan(spec: Spec, threads: int) -> Plan:
 
 
 def _measure_bytes(spec) -> int:
-    """Bytes of one cluster's measures (``store.SCHEMA``'s per-task variables, at their stored types)."""
+    """Bytes of one cluster's measures (``schema.SCHEMA``'s per-task variables, at their stored types)."""
     lengths = {"n_particles": len(spec.counts), "history": len(growth_counts(spec.counts)),
                "scale": len(sweep_scales(spec))}
     total = 0
-    for name in (*store.SCIENCE, "wall_time"):
-        var = store.SCHEMA[name]
+    for name in (*schema.SCIENCE, "wall_time"):
+        var = schema.SCHEMA[name]
         total += np.dtype(var.dtype).itemsize * math.prod(lengths.get(dim, 1) for dim in var.dims)
     return total
 

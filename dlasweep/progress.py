@@ -1,7 +1,9 @@
-"""Progress of a sweep as lines on stderr, for a log: where a progress bar would be a mess (not a terminal)."""
+"""Progress on stderr: bars on a terminal (tqdm, ``growth_bar``, ``steps_bar``), and a sweep's lines for a
+log (``Lines``), where a progress bar would be a mess."""
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 
@@ -55,3 +57,39 @@ def _duration(seconds) -> str:
     if seconds < 120:
         return f"{seconds:.0f} s"
     return f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h"
+
+
+def growth_bar(n, model):
+    """A progress bar for ``grow`` on a terminal (particles, rate, time left), else ``nullcontext(None)``.
+
+    Announces first that the kernels compile when numba's cache lacks them.
+    The bar shows once growth has taken a second: small clusters print nothing more.
+    """
+    if not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    from .grow import compiled
+
+    if not compiled(model):
+        print("dlasweep grow: compiling kernels (once)", file=sys.stderr)
+    from tqdm import tqdm
+
+    return tqdm(total=n, unit=" particles", unit_scale=True, desc="grow", file=sys.stderr, delay=1.0, leave=False)
+
+
+def steps_bar(desc):
+    """A progress bar of named steps on a terminal (shown after a second), else ``nullcontext(None)``."""
+    if not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    from tqdm import tqdm
+
+    return tqdm(desc=desc, unit="step", file=sys.stderr, delay=1.0, leave=False,
+                bar_format="{desc}: {n}/{total} [{elapsed}<{remaining}]{postfix}")
+
+
+def follow(bar):
+    """``progress(done, steps, name)`` that moves ``bar`` to step ``done`` of ``steps``, named."""
+    def progress(done, steps, name):
+        bar.total = steps
+        bar.set_postfix_str(name, refresh=False)
+        bar.update(done - bar.n)
+    return progress

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .analysis import config_dims, exact_reference, method_axes, summarise
+from .analysis import summarise
+from .exact import exact_reference, method_axes
 from .params import EXACT_METHOD, PARAMETERS, SHORTCUTS, Status
+from .schema import config_dims, plain
 from .selection import with_selected_clusters
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
@@ -194,12 +196,6 @@ class Readout:
         line = [c for c in self.configs if all(c[i] == base[i] for i in range(len(c)) if i != a)]
         exact = [c for c in line if self.value(axis, c) == EXACT_METHOD.get(axis)]
         return exact, [c for c in line if c not in exact]
-
-
-def plain(value):
-    """A numpy scalar (or bytes) as a plain Python value (str)."""
-    value = value.item() if hasattr(value, "item") else value
-    return value.decode() if isinstance(value, bytes) else value
 
 
 def error_bars(mean, lo, hi):

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from .branching import ratio_line
+from .config import LEVEL
+from .figures import colour_of, new_figure, save_figure
 from .tree import MIN_BRANCHES
 
 LITERATURE = {2: "5.2 in simulations and 4.9 from the branched-growth model (both quoted by Halsey 1997)"}
@@ -28,8 +30,6 @@ def _ratio(sweep, config, name="bifurcation_ratio") -> str:
 
 def branching_figure(sweep, path):
     """Mean branch counts per order, log scale, each configuration with its fitted ratio; None without parents."""
-    from .report import colour_of, new_figure, save_figure  # here: report imports this module
-
     shown = _shown(sweep)
     if not shown:
         return None
@@ -52,7 +52,7 @@ def branching_figure(sweep, path):
     literature = LITERATURE.get(sweep.dim)
     return ("Branches of each Horton-Strahler order (points: mean over the stored clusters) and the line "
             "falling by the bifurcation ratio R_b an order (R_b: mean over clusters of each one's fit over "
-            f"the orders with at least {MIN_BRANCHES} branches, with its 95% CI; the highest orders of a finite "
+            f"the orders with at least {MIN_BRANCHES} branches, with its {LEVEL} CI; the highest orders of a finite "
             "cluster are cut short)."
             + (f" 2D DLA: R_b is {literature}." if literature else ""))
 
@@ -66,7 +66,7 @@ def branching_lines(sweep) -> list:
     lines = ["## Branching", "",
              f"The stored clusters as trees (each particle's parent: the one it stuck to), at N = "
              f"{sweep.counts[-1]}. R_b: Horton-Strahler bifurcation ratio; d_l: chemical-distance dimension "
-             "(particles within l bonds of the seed ~ l^d_l); means over clusters with 95% CIs."
+             f"(particles within l bonds of the seed ~ l^d_l); means over clusters with {LEVEL} CIs."
              + (f" Published for 2D DLA: R_b = {literature}." if literature else ""), "",
              "| configuration | clusters | highest order | R_b | d_l |", "|---|---|---|---|---|"]
     orders = sweep.s["order"].values

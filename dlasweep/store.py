@@ -1,58 +1,7 @@
-"""The netCDF side of dlasweep: dataset layout, atomic writes, reading back.
+"""The netCDF side of dlasweep: datasets assembled, written atomically, opened and checked.
 
-Layout (README, "The dataset"): the measured quantities on dims
-``(<swept params>..., size, n_particles, seed[, scale])``; the clusters as a
-CF contiguous ragged array, ``x``, ``y`` (``z``), ``diffusion_time`` and
-``parent`` along ``particle`` with the count variable ``cluster_particles(cluster)``, whose
-parameters are the ``cluster_<name>`` coordinates on ``cluster``. Every
-model parameter that is not swept is a scalar coordinate, so ``ds["dim"]``
-or ``ds["model"]`` works whether or not it is a sweep axis.
-
-CF (checked with cfchecker, CF-1.8; tests/test_store.py):
-
-* A discrete sampling geometry, one cluster per instance: ``featureType =
-  "trajectory"``. CF-1.8 (9.1, 9.3.3) gives the contiguous ragged array, a
-  count variable with ``sample_dimension``, to timeSeries, trajectory,
-  profile and their combinations, not to point, whose every instance is
-  one point: a point file's count variable groups nothing CF names. Of
-  those, a cluster is a trajectory, "a series of data points along a path
-  through space" in order: its particles in the order they attached, the
-  growth's clock. A time series stays at one place and a profile on one
-  vertical line. CF lists a time coordinate for trajectories; here a
-  particle's place in its cluster's block is its attachment order, and no
-  variable repeats it (8 bytes a particle).
-* ``cluster(cluster)``, the coordinate variable of the instance dimension
-  (0, 1, ...: the cluster's position in the file), has ``cf_role =
-  "trajectory_id"`` as in CF's examples: the one instance variable of a
-  trajectory file (a ``cluster_<name>`` is one of the clusters'
-  parameters). ``cluster_particles`` is the count variable (32-bit
-  ``int``, the integer type the checker asks of it; a cluster holds at
-  most ``spec.MAX_PARTICLES`` particles).
-* ``x``, ``y`` (``z``) are the particles' space coordinates, auxiliary
-  coordinates of ``diffusion_time`` (its ``coordinates`` attribute), with
-  ``axis = "X"``, ``"Y"``, ``"Z"``: cf_xarray's ``ds.cf["X"]`` finds them.
-  No ``standard_name``: CF's names for positions (``projection_x_coordinate``
-  and the like) are lengths in metres on a map; these are counted in
-  lattice spacings or particle diameters.
-* cfchecker 4.1 notes "attribute sample_dimension is being used in a
-  non-standard way" on every count variable of a CF-1.7 or later file, CF's
-  own examples included (its table of attributes names no kind of variable
-  for it from CF-1.7 on): that note is the checker's, not this layout's.
-* Strings (``model``, ``seed_shape``, ``launch`` and their ``cluster_``
-  coordinates) are char arrays with a string-length dimension
-  (``string<N>``) and ``_Encoding = "utf-8"``: the CF-1.8 check rejects
-  netCDF-4 variable-length strings, and char arrays read everywhere.
-  xarray and netCDF4-python turn them back into strings. They have a
-  ``long_name`` and no ``units``. A swept string parameter stays a
-  variable named after its dimension, so that xarray selects by it; the
-  checker warns there, as a CF coordinate variable is numeric.
-* Booleans (``jumps``) are int8 0/1 with ``flag_values`` and
-  ``flag_meanings = "false true"``, nothing else: ``open_sweep`` turns them
-  back into bool (xarray would want its own ``dtype = "bool"`` attribute,
-  which is no CF attribute). They are model parameters, so coordinates,
-  and the checker notes flags there (CF-1.8 names them for data variables).
-* ``history``: when the file was made, by which command line (the CLI's,
-  ``command_line``) or Python function, and the dlasweep version.
+The layout and every variable's attributes are ``schema``'s; reading one
+cluster back is ``ragged``'s. This module is the only one that knows netCDF.
 """
 
 from __future__ import annotations
@@ -62,7 +11,6 @@ import contextvars
 import datetime
 import os
 import shlex
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import netCDF4
@@ -71,112 +19,9 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
-from .kernels.model import STEPS_DTYPE
-from .selection import selected_clusters
-
-STATUS_FLAGS = _params.STATUSES
-"""Meaning of each integer code of ``status``."""
-
-AXES = ("x", "y", "z")
-
-_LENGTH = "lattice spacings (lattice) or particle diameters (offlattice)"
-_CONFIG = "..."
-"""First of a variable's dims in ``SCHEMA``: the swept model parameters, in spec order."""
-
-
-@dataclass(frozen=True)
-class Variable:
-    """One variable of a dataset: its dims, type and attributes.
-
-    Attributes
-    ----------
-    dims : tuple of str
-        ``"..."`` first stands for the swept model parameters (spec order).
-    dtype : numpy dtype or None
-        None where it depends on the data (positions: ``ragged_dtype``).
-    units : str or None
-        None for strings, which have no units.
-    long_name : str
-    cf : dict
-        Its other CF attributes (``axis``, ``cf_role``, ``sample_dimension``).
-    """
-
-    dims: tuple
-    dtype: object
-    units: str | None
-    long_name: str
-    cf: dict = field(default_factory=dict)
-
-    @property
-    def missing(self):
-        """The value of a not-yet-measured (or failed) entry: NaN for floats, 0 for counts."""
-        return np.nan if np.dtype(self.dtype).kind == "f" else 0
-
-
-_SWEPT = (_CONFIG, "size", "n_particles", "seed")
-SCHEMA = {
-    "box_count": Variable((*_SWEPT, "scale"), np.int64, "1", "number of boxes of side `scale` holding particles"),
-    "n_grown": Variable(_SWEPT, np.int64, "1", "particles attached at this count (less when growth stopped early)"),
-    "status": Variable(_SWEPT, np.int8, "1", "growth outcome at this count"),
-    "radius_gyration": Variable(_SWEPT, np.float64, "1", f"radius of gyration, in {_LENGTH}"),
-    "radius_gyration_history": Variable((_CONFIG, "size", "seed", "history"), np.float64, "1",
-                                        f"radius of gyration of the first `history` particles, in {_LENGTH}"),
-    "max_radius": Variable(_SWEPT, np.float64, "1",
-                           f"largest distance of a particle from the seed particle, in {_LENGTH}"),
-    "anisotropy": Variable(_SWEPT, np.float64, "1",
-                           "cubic anisotropy of the outer half of the mass about the seed: <cos 4 theta> in 2D, "
-                           "the cubic harmonic scaled alike in 3D (1: along the axes, 0: isotropic)"),
-    "walk_steps": Variable(_SWEPT, np.int64, "1", "walk steps (or exact jumps) of every walker until this count"),
-    "wall_time": Variable(_SWEPT, np.float64, "s", "seconds spent growing the cluster to this count"),
-    "D_ci_half_width": Variable((_CONFIG, "size"), np.float64, "1",
-                                "half-width of the 95% bootstrap confidence interval over seeds of the headline "
-                                "(mass-radius) fractal dimension D at the largest particle count"),
-    # coordinates
-    "n_particles": Variable(("n_particles",), np.int64, "1", "target number of particles"),
-    "seed": Variable(("seed",), np.int64, "1",
-                     "replicate number (with root_seed and the grid indices it names the random stream)"),
-    "scale": Variable(("scale",), np.float64, "1", f"box side for box counting, in {_LENGTH}"),
-    "history": Variable(("history",), np.int64, "1", "particle count at which the growth history is recorded"),
-    # the clusters: a CF contiguous ragged array of trajectories (see CF in the module docstring)
-    "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster",
-                                  {"sample_dimension": "particle"}),
-    "cluster": Variable(("cluster",), np.int32, "1", "number of the cluster: its position in the file",
-                        {"cf_role": "trajectory_id"}),
-    "cluster_seed": Variable(("cluster",), np.int64, "1", "replicate number of the cluster"),
-    **{a: Variable(("particle",), None, "1", f"{a} coordinate of the particle centre, in {_LENGTH}",
-                   {"axis": a.upper()}) for a in AXES},
-    "diffusion_time": Variable(("particle",), STEPS_DTYPE, "1",
-                               "walk steps (or exact jumps) from release to sticking; 4294967295: at least that many"),
-    "parent": Variable(("particle",), np.int32, "1",
-                       "position in its cluster (0 = first) of the particle this one stuck to; "
-                       "-1 = none: a seed particle, or one that stuck to the substrate",
-                       {"valid_min": np.int32(-1)}),
-    # Every model parameter: a sweep axis, else a scalar; strings have no units.
-    **{name: Variable((name,), p.kind, p.units, p.meaning) for name, p in _params.PARAMETERS.items()},
-}
-"""Every variable of a dataset dlasweep writes (a sweep, or one grown cluster): the one place
-its dims, type, units and long name are spelled. ``cluster_<name>`` coordinates take the
-attributes of ``<name>``; the other per-cluster variables of one grown cluster (``status``)
-are on ``cluster`` there."""
-
-SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps",
-           "radius_gyration_history")
-"""Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
-
-def blank(name, shape) -> np.ndarray:
-    """An array for variable ``name`` of ``SCHEMA``, of its type, every entry missing (``Variable.missing``)."""
-    var = SCHEMA[name]
-    return np.full(shape, var.missing, var.dtype)
-
-
-def dims(name, axes) -> tuple:
-    """The dims of variable ``name`` of ``SCHEMA`` in a sweep whose swept parameters are ``axes``."""
-    return tuple(d for dim in SCHEMA[name].dims for d in (axes if dim == _CONFIG else (dim,)))
-
-
-class StoreError(ValueError):
-    """A file that is not a readable dlasweep dataset; one line naming it."""
-
+from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns,
+                     ragged_dtype)
+from .schema import Variable  # noqa: F401 (bench.BENCH_SCHEMA still takes it from here)
 
 def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
     """Assemble a sweep's results into the layout of README, "The dataset", clusters aside.
@@ -289,11 +134,6 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     return _describe(xr.Dataset(data, coords=coords, attrs=attrs))
 
 
-def ragged_dtype(lattice: bool):
-    """Type of stored positions: int32 for lattice sites, float64 off the lattice."""
-    return np.int32 if lattice else np.float64
-
-
 def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
     """``ds`` (from ``to_dataset``) with its stored clusters as per-particle variables in memory.
 
@@ -318,18 +158,6 @@ def _cluster_columns(columns, points, times, parents) -> dict:
     axes = [name for name in columns if name in AXES]
     return {**{a: points[:, k] if k < points.shape[1] else np.zeros(len(points), points.dtype)
                for k, a in enumerate(axes)}, "diffusion_time": times, "parent": parents}
-
-
-def ragged_columns(models, dims) -> dict:
-    """The per-particle variables of clusters of these models and dims, and their types: positions, diffusion times, parents.
-
-    Lattice positions are int32 sites, off-lattice ones float64 (and float64
-    for all when both are swept); with ``dim`` swept, 2D clusters lie in the
-    z = 0 plane of 3D columns.
-    """
-    lattice = bool((np.asarray(models) == "lattice").all())
-    return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]}, "diffusion_time": np.dtype(SCHEMA["diffusion_time"].dtype),
-            "parent": np.dtype(SCHEMA["parent"].dtype)}
 
 
 PARTICLE_CHUNK = 1 << 16
@@ -562,141 +390,6 @@ def _open(path, required, chunks=None) -> xr.Dataset:
     return ds
 
 
-def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
-    """Positions of one stored cluster, in attachment order.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        From ``open_sweep`` or ``run_sweep``, or a selection of one
-        (``ds.sel(stickiness=0.5)``): ``where`` then looks among the clusters
-        of the selection only (``selected_clusters``).
-    index : int, optional
-        Position along ``cluster`` (task order).
-    **where
-        Otherwise, the cluster's parameters, e.g. ``stickiness=0.5, seed=3``;
-        names without the ``cluster_`` prefix. They must pick one cluster.
-
-    Returns
-    -------
-    ndarray, (n, dim)
-    """
-    index = _index(ds, index, where)
-    start, stop = _particles_of(ds, index)
-    # With dim swept, 2D clusters sit in the z = 0 plane of a 3D ragged array.
-    return np.stack([ds[a][start:stop].values for a in AXES[:_cluster_value(ds, "dim", index)]], axis=1)
-
-
-def cluster_parents(ds: xr.Dataset, index=None, **where) -> np.ndarray:
-    """Parents of one stored cluster's particles, in attachment order (``Cluster.parents``).
-
-    Parameters
-    ----------
-    ds, index, where
-        As for ``cluster_points``.
-
-    Returns
-    -------
-    ndarray, (n,) int32
-        Position in the cluster of the particle each one stuck to; -1 for
-        the seed particles and those that stuck to a substrate.
-
-    Raises
-    ------
-    StoreError
-        When the file predates parents (no ``parent`` variable).
-    """
-    if "parent" not in ds.variables:
-        raise StoreError("parent: this file holds no parents (written before dlasweep stored them)")
-    index = _index(ds, index, where)
-    start, stop = _particles_of(ds, index)
-    return ds["parent"][start:stop].values.astype(np.int32)
-
-
-def read_cluster(ds: xr.Dataset, index=None, **where):
-    """One stored cluster, as ``grow`` returned it: points, diffusion times, status and parameters.
-
-    Only that cluster's range of the per-particle arrays is read (with dask
-    chunks, only the chunks that hold it).
-
-    Parameters
-    ----------
-    ds, index, where
-        As for ``cluster_points``.
-
-    Returns
-    -------
-    dlasweep.grow.Cluster
-        ``status`` is the growth's outcome at the largest count; no
-        checkpoint times (a sweep keeps them in ``wall_time``).
-    """
-    from .grow import Cluster
-
-    index = _index(ds, index, where)
-    start, stop = _particles_of(ds, index)
-    # a parameter younger than the file takes its default, the behaviour of the code that wrote it
-    params = {name: _cluster_value(ds, name, index) for name in _params.PARAMETERS
-              if name in ds.coords or f"cluster_{name}" in ds.coords}
-    return Cluster(cluster_points(ds, index), ds["diffusion_time"][start:stop].values, _status(ds, index),
-                   _params.resolve(**params),
-                   parents=cluster_parents(ds, index) if "parent" in ds.variables else None)
-
-
-def _index(ds, index, where) -> int:
-    """The position on ``cluster`` that ``index`` or ``where`` names (``cluster_points``), checked."""
-    if (index is None) == (not where):
-        raise TypeError("cluster: give either an index or parameter values")
-    if index is None:
-        return _find_cluster(ds, where)
-    count = ds.sizes.get("cluster", 0)
-    if not -count <= index < count:
-        raise IndexError(f"cluster: index {index} is outside 0..{count - 1}")
-    return int(index) % count
-
-
-def _particles_of(ds, index) -> tuple:
-    """The range of ``particle`` that holds cluster ``index``."""
-    counts = ds["cluster_particles"].values
-    start = int(counts[:index].sum())
-    return start, start + int(counts[index])
-
-
-def _cluster_value(ds, name, index):
-    """Model parameter ``name`` of cluster ``index``: its ``cluster_<name>`` value, else the dataset's scalar.
-
-    A boolean comes back as bool also from a file opened without ``open_sweep`` (int8 flags there).
-    """
-    coord = f"cluster_{name}"
-    var = ds[coord][index] if coord in ds.coords else ds[name]
-    value = var.values.item()
-    return bool(value) if var.attrs.get("flag_meanings") == _BOOLEAN else value
-
-
-def _status(ds, index) -> str:
-    """Cluster ``index``'s growth outcome: at the largest count of a sweep, or its own in a grown cluster's file."""
-    status = ds["status"]
-    if status.dims == ("cluster",):
-        return STATUS_FLAGS[int(status[index])]
-    at = {d: ds[f"cluster_{d}"].values[index] for d in status.dims if d != "n_particles"}
-    return STATUS_FLAGS[int(status.sel(at).isel(n_particles=-1))]
-
-
-def _find_cluster(ds, where) -> int:
-    """The position on ``cluster`` of the one cluster of ``ds``'s selection whose parameters are ``where``."""
-    candidates = selected_clusters(ds)
-    match = np.ones(len(candidates), bool)
-    for name, value in where.items():
-        coord = f"cluster_{name}"
-        if coord not in ds.coords:
-            known = [c[len("cluster_"):] for c in ds.coords if c.startswith("cluster_")]
-            raise ValueError(f"{name}: not a cluster parameter (known: {', '.join(known)})")
-        match &= ds[coord].values[candidates] == value
-    found = candidates[match]
-    if len(found) != 1:
-        raise ValueError(f"{where}: matches {len(found)} clusters, not one")
-    return int(found[0])
-
-
 def _coordinate(values, dtype=None) -> np.ndarray:
     """Values as an array whose type survives netCDF: strings as objects, none as str (xarray
     writes an empty object array as doubles)."""
@@ -736,32 +429,10 @@ def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
     return ds
 
 
-_BOOLEAN = "false true"
-"""``flag_meanings`` of a boolean."""
-
-
-def attributes(name, dtype=None, schema=None) -> dict:
-    """A variable's ``long_name`` and ``units`` (none for strings), its other CF attributes, the meanings of its flags.
-
-    From its row of ``schema`` (default ``SCHEMA``); a ``cluster_<name>``
-    coordinate takes ``<name>``'s, as "the cluster's <name>: ...".
-    """
-    schema = SCHEMA if schema is None else schema
-    key = name if name in schema else name.removeprefix("cluster_")
-    var = schema[key]
-    long_name = var.long_name if key == name else f"the cluster's {key}: {var.long_name}"
-    attrs = {"long_name": long_name, **({"units": var.units} if var.units else {}), **var.cf}
-    if name == "status":
-        attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
-    elif dtype == bool:
-        attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings=_BOOLEAN)
-    return attrs
-
-
 def _booleans(ds: xr.Dataset) -> xr.Dataset:
-    """Turn ``ds``'s booleans (int8 flags ``_BOOLEAN`` in the file) back into bool, in place: it still closes its file."""
+    """Turn ``ds``'s booleans (int8 flags ``BOOLEAN`` in the file) back into bool, in place: it still closes its file."""
     for name, var in list(ds.variables.items()):
-        if var.attrs.get("flag_meanings") == _BOOLEAN and var.dtype != bool:
+        if var.attrs.get("flag_meanings") == BOOLEAN and var.dtype != bool:
             (ds.coords if name in ds.coords else ds)[name] = var.astype(bool)
     return ds
 

@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import store
+from . import schema, store
 from .analysis import headline
 from .fit import growth_counts
 from .grow import compiled
@@ -430,7 +430,7 @@ def _assemble(spec, parts):
     tasks = list(spec.tasks())
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
-    science = {name: store.blank(name, shapes.get(name, grid)) for name in (*store.SCIENCE, "wall_time")}
+    science = {name: schema.blank(name, shapes.get(name, grid)) for name in (*schema.SCIENCE, "wall_time")}
     table = parts.table((t.key for t in tasks), (*science, "points.shape", "error"))
     for name, values in science.items():
         # The tasks are the grid's points in C order; but for the history, a
@@ -456,7 +456,7 @@ class _Stream:
         tasks = list(spec.tasks())
         self.parts, self.next, self.pending = parts, 0, {task.key for task in todo}
         self.keys = [task.key for task in tasks if spec.stores(task)]
-        columns = store.ragged_columns([t.params["model"] for t in tasks], [t.params["dim"] for t in tasks])
+        columns = schema.ragged_columns([t.params["model"] for t in tasks], [t.params["dim"] for t in tasks])
         self.writer = store.ParticleWriter(parts.path / PARTICLES, columns)
 
     def feed(self, done=()):

@@ -13,7 +13,7 @@ import itertools
 
 import numpy as np
 
-from . import measure, store
+from . import measure, schema, store
 from .boxes import default_scales
 from .fit import growth_counts
 from .grow import grow, grow_many
@@ -93,7 +93,7 @@ def error_result(counts, n_scales, dim, message) -> dict:
     """The result recorded for a task that raised (or whose worker kept dying)."""
     n_counts = len(counts)
     shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
-    result = {name: store.blank(name, shapes.get(name, n_counts)) for name in (*store.SCIENCE, "wall_time")}
+    result = {name: schema.blank(name, shapes.get(name, n_counts)) for name in (*schema.SCIENCE, "wall_time")}
     result["status"][:] = Status.error
-    return {**result, "points": np.zeros((0, dim)), "diffusion_time": store.blank("diffusion_time", 0),
-            "parent": store.blank("parent", 0), "error": np.array(store.one_line(message))}
+    return {**result, "points": np.zeros((0, dim)), "diffusion_time": schema.blank("diffusion_time", 0),
+            "parent": schema.blank("parent", 0), "error": np.array(store.one_line(message))}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ctypes.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -102,7 +103,7 @@ def run_cli(capsys):
 
 def science(ds):
     """The variables that must be bit-identical between runs (timings aside), clusters included."""
-    from dlasweep.store import SCIENCE
+    from dlasweep.schema import SCIENCE
 
     names = [*SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]
     return ds[names].drop_attrs(deep=False).load()
@@ -111,6 +112,52 @@ def science(ds):
 def files_under(path: Path) -> set:
     """Every file and folder below ``path``, relative to it."""
     return {p.relative_to(path) for p in Path(path).rglob("*")}
+
+
+@pytest.fixture(scope="session")
+def reference(tmp_path_factory, dask_client):
+    """The tiny sweep, run once on two in-process workers (for the sweep's and the parts' tests)."""
+    import dlasweep as dla
+    from dlasweep.spec import parse_spec
+
+    out = tmp_path_factory.mktemp("reference") / "tiny.nc"
+    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+    yield ds
+    ds.close()
+
+
+class Interrupt(BaseException):
+    """Stands for a kill: nothing in the sweep may catch it."""
+
+
+def interrupt_after(monkeypatch, n_clusters):
+    """Make the process die at the first part that would bring the saved clusters past n, as a kill would."""
+    from dlasweep.parts import Parts
+
+    written = []
+    real_write = Parts.write
+
+    def write(self, results):
+        if len(written) + len(results) > n_clusters:
+            raise Interrupt
+        real_write(self, results)
+        written.extend(results)
+
+    monkeypatch.setattr(Parts, "write", write)
+    return written
+
+
+def finished_clusters(out):
+    """The keys of the clusters finished in the parts of ``out``."""
+    from dlasweep.parts import Parts
+
+    parts = Parts(Path(f"{out}.parts"))
+    return [key for key in parts.where if parts.finished(key)]
+
+
+def progress_lines(text) -> list:
+    """The finished counts the progress lines in ``text`` give."""
+    return [int(n) for n in re.findall(r"^\w+ \d\d:\d\d:\d\d: (\d+)/\d+ clusters finished", text, re.M)]
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import dlasweep as dla
-from dlasweep import store
+from dlasweep import ragged, store
 
 SPEC = """\
 name = "accessor"
@@ -74,7 +74,7 @@ def test_growing_loads_neither_xarray_nor_matplotlib_and_xarray_gets_the_accesso
 def test_a_cluster_comes_back_with_its_diffusion_times_status_and_parameters(ds):
     c = ds.dla.cluster(stickiness=0.5, seed=3)
     assert isinstance(c, dla.Cluster)
-    np.testing.assert_array_equal(c.points, store.cluster_points(ds, stickiness=0.5, seed=3))
+    np.testing.assert_array_equal(c.points, ragged.cluster_points(ds, stickiness=0.5, seed=3))
     assert c.n == len(c.steps) == 300
     # the sweep measured the walk steps of every walker to the largest count: the same walkers
     assert c.steps.sum() == int(ds["walk_steps"].sel(stickiness=0.5, size=0, seed=3).isel(n_particles=-1))
@@ -95,12 +95,12 @@ def test_a_grown_cluster_comes_back_from_its_file(tmp_path):
 
 def test_selection_on_the_grid_subsets_the_clusters(ds):
     sub = ds.sel(stickiness=0.5)
-    np.testing.assert_array_equal(store.cluster_points(sub, seed=3), store.cluster_points(ds, stickiness=0.5, seed=3))
+    np.testing.assert_array_equal(ragged.cluster_points(sub, seed=3), ragged.cluster_points(ds, stickiness=0.5, seed=3))
     np.testing.assert_array_equal(sub.dla.cluster(seed=3).points, ds.dla.cluster(stickiness=0.5, seed=3).points)
     assert [c.params["stickiness"] for c in sub.dla] == [0.5] * 4
     assert len(ds.isel(seed=[1, 3]).dla) == 4
     # k counts the clusters of the selection
-    np.testing.assert_array_equal(sub.dla.cluster(0).points, store.cluster_points(ds, stickiness=0.5, seed=0))
+    np.testing.assert_array_equal(sub.dla.cluster(0).points, ragged.cluster_points(ds, stickiness=0.5, seed=0))
     with pytest.raises(ValueError, match="matches 0 clusters"):
         sub.dla.cluster(stickiness=1.0, seed=0)
 
@@ -109,7 +109,7 @@ def test_clusters_iterate_in_order(ds):
     clusters = list(ds.dla.clusters())
     assert len(clusters) == len(ds.dla) == ds.sizes["cluster"] == 8
     for k, c in enumerate(clusters):
-        np.testing.assert_array_equal(c.points, store.cluster_points(ds, k))
+        np.testing.assert_array_equal(c.points, ragged.cluster_points(ds, k))
     assert sum(c.n for c in ds.dla) == ds.sizes["particle"]
 
 

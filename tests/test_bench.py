@@ -9,7 +9,7 @@ def test_bench_quick_writes_its_outputs(tmp_path):
     from matplotlib.image import imread
 
     from dlasweep.bench import BENCH_SCHEMA
-    from dlasweep.store import attributes
+    from dlasweep.schema import attributes
 
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "-o", str(out)]) == 0

@@ -2,6 +2,7 @@
 sweeps end to end; what ``info`` tells of a file."""
 
 import contextlib
+import importlib
 import io
 import shutil
 import signal
@@ -20,7 +21,7 @@ from hypothesis import strategies as st
 
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
-from dlasweep import cli, store
+from dlasweep import cli, ragged, schema, store
 from dlasweep.parts import Parts
 from dlasweep.report import files as report_files
 from dlasweep.params import PARAMETERS
@@ -141,7 +142,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
     assert status == 0, err
     expected = dla.grow(80, 3, stickiness=0.5)
     with store.open_sweep(out) as ds:
-        np.testing.assert_array_equal(store.cluster_points(ds, 0), expected.points)
+        np.testing.assert_array_equal(ragged.cluster_points(ds, 0), expected.points)
         np.testing.assert_array_equal(ds["diffusion_time"], expected.steps)
         np.testing.assert_array_equal(dla.cluster_parents(ds, 0), expected.parents)
         assert float(ds["stickiness"]) == 0.5 and ds.attrs["seed"] == 3
@@ -209,8 +210,8 @@ def test_report_shows_progress_on_a_terminal_only(tiny_sweep, run_cli, tmp_path,
     from dlasweep import cli
 
     bars = []
-    real_bar = cli._steps_bar
-    monkeypatch.setattr(cli, "_steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
+    real_bar = cli.steps_bar
+    monkeypatch.setattr(cli, "steps_bar", lambda desc: bars.append(real_bar(desc)) or bars[-1])
     status, _, err = run_cli("report", tiny_sweep[3] / "tiny.nc", "-o", tmp_path / "piped")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
@@ -297,7 +298,7 @@ def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_clu
     assert plan.startswith("dlasweep sweep: plan: 12 clusters, 1,800 particles")
     assert "task-0-0-0: MemoryError: no room" in failure
     with store.open_sweep(out) as ds:
-        assert (ds["status"] == store.STATUS_FLAGS.index("error")).all()
+        assert (ds["status"] == schema.STATUS_FLAGS.index("error")).all()
     status, info, err = run_cli("info", out)
     assert status == 0, err
     lines = info.splitlines()
@@ -424,17 +425,17 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     from dlasweep import cli
 
     bars = []
-    real_bar = cli._growth_bar
-    monkeypatch.setattr(cli, "_growth_bar", lambda n, model: bars.append(real_bar(n, model)) or bars[-1])
+    real_bar = cli.growth_bar
+    monkeypatch.setattr(cli, "growth_bar", lambda n, model: bars.append(real_bar(n, model)) or bars[-1])
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    monkeypatch.setattr(cli, "compiled", lambda model: model != "offlattice")
+    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled", lambda model: model != "offlattice")
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
     with store.open_sweep(tmp_path / "shown.nc") as ds:
-        np.testing.assert_array_equal(store.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)
+        np.testing.assert_array_equal(ragged.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)
 
 
 def test_the_installed_command_exits_with_main_status_and_complete_output(tmp_path):

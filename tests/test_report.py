@@ -14,7 +14,7 @@ import dlasweep as dla
 from conftest import colours_shown
 from dlasweep.boxes import box_counts, default_scales
 from dlasweep.measure import anisotropy, max_radius, radius_of_gyration
-from dlasweep import store
+from dlasweep import schema
 from dlasweep.config import MIN_CI_SEEDS
 from dlasweep.readout import Readout
 from dlasweep.params import STATUSES
@@ -27,8 +27,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
     scales = default_scales(counts[-1])
     shape = (*(len(v) for v in axes.values()), len(sizes), len(counts), seeds)
     # Every variable but the growth history (a file from before it was recorded).
-    science = {name: store.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
-               for name in (*store.SCIENCE, "wall_time") if name != "radius_gyration_history"}
+    science = {name: schema.blank(name, (*shape, len(scales)) if name == "box_count" else shape)
+               for name in (*schema.SCIENCE, "wall_time") if name != "radius_gyration_history"}
     ragged = {a: [] for a in ("x", "y", "diffusion_time", *(["parent"] if parents else []))}
     cluster = {f"cluster_{a}": [] for a in (*axes, "size", "seed")}
     particles = []
@@ -59,7 +59,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
             cluster[f"cluster_{name}"].append(value)
     ds = xr.Dataset(
         {
-            **{name: (store.dims(name, tuple(axes)), values) for name, values in science.items()},
+            **{name: (schema.dims(name, tuple(axes)), values) for name, values in science.items()},
             "cluster_particles": ("cluster", np.array(particles), {"sample_dimension": "particle"}),
             **{name: ("particle", np.concatenate(values)) for name, values in ragged.items()},
         },
@@ -76,7 +76,7 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
         attrs={"title": "synthetic sweep", "spec": 'name = "synthetic"', "root_seed": 1, "source": "dlasweep test"},
     )
     for name, var in ds.variables.items():
-        var.attrs.update(store.attributes(name, var.dtype))
+        var.attrs.update(schema.attributes(name, var.dtype))
     return ds
 
 
@@ -191,11 +191,10 @@ def thirty_variants(dask_client):
 
 def drawn(monkeypatch, plot, ds, tmp_path, caption=False):
     """Run one plot of the report and return its Figure (and its caption) instead of only a file."""
-    import importlib
+    from dlasweep import report_plots
 
-    module = importlib.import_module("dlasweep.report")  # `dlasweep.report` is also the function
     figures = []
-    monkeypatch.setattr(module, "save_figure", lambda fig, path: figures.append(fig) or fig.savefig(path))
+    monkeypatch.setattr(report_plots, "save_figure", lambda fig, path: figures.append(fig) or fig.savefig(path))
     said = plot(Readout(ds), tmp_path / "plot.png")
     assert said and (tmp_path / "plot.png").stat().st_size > 0
     (fig,) = figures
@@ -208,7 +207,7 @@ def overlaps(a, b):
 
 
 def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, monkeypatch, tmp_path):
-    from dlasweep.report import _speed_accuracy
+    from dlasweep.report_plots import _speed_accuracy
 
     fig = drawn(monkeypatch, _speed_accuracy, thirty_variants, tmp_path)
     panels = [ax for ax in fig.axes if ax.get_visible()]
@@ -227,7 +226,7 @@ def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, mon
 
 
 def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_variants, monkeypatch, tmp_path):
-    from dlasweep.report import _failure
+    from dlasweep.report_plots import _failure
 
     fig, caption = drawn(monkeypatch, _failure, thirty_variants, tmp_path, caption=True)
     panels = [ax for ax in fig.axes if ax.get_visible()]
@@ -247,7 +246,7 @@ def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_var
 
 
 def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch, tmp_path):
-    from dlasweep.report import _failure
+    from dlasweep.report_plots import _failure
 
     assert _failure(Readout(synthetic_sweep({"stickiness": [1.0, 0.5]}, counts=(200, 400), seeds=2)),
                     tmp_path / "none.png") is None
@@ -263,7 +262,7 @@ def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch,
 
 
 def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_path):
-    from dlasweep.report import _dimension_vs_n, _mass_radius
+    from dlasweep.report_plots import _dimension_vs_n, _mass_radius
 
     ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=MIN_CI_SEEDS - 1)
     fig, caption = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path, caption=True)
@@ -280,7 +279,7 @@ def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_pat
 
 
 def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_path):
-    from dlasweep.report import _box_local_slopes, _diffusion_times
+    from dlasweep.report_plots import _box_local_slopes, _diffusion_times
 
     ds = synthetic_sweep({"jumps": [True, False]}, counts=(100, 200), seeds=2)
     fig = drawn(monkeypatch, _box_local_slopes, ds, tmp_path)
@@ -295,7 +294,7 @@ def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_p
 
 
 def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tmp_path):
-    from dlasweep.report import _anisotropy, _dimension_spread, _speed_accuracy
+    from dlasweep.report_plots import _anisotropy, _dimension_spread, _speed_accuracy
 
     ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(200, 400), seeds=2)
     for plot in (_anisotropy, _dimension_spread, _speed_accuracy):

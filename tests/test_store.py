@@ -13,7 +13,7 @@ import xarray as xr
 from conftest import ROOT
 
 import dlasweep as dla
-from dlasweep import bench, store
+from dlasweep import bench, ragged, schema, store
 from dlasweep.grow import Cluster
 from dlasweep.params import PARAMETERS, resolve
 from dlasweep.spec import parse_spec
@@ -229,7 +229,7 @@ def test_cf_xarray_finds_the_axes_and_the_clusters(tmp_path, dim):
     path = tmp_path / "one.nc"
     store.save(store.cluster_dataset(dla.grow(30, 1, dim=dim), seed=1), path)
     with xr.open_dataset(path) as ds:
-        assert ds.cf.axes == {a.upper(): [a] for a in store.AXES[:dim]}
+        assert ds.cf.axes == {a.upper(): [a] for a in schema.AXES[:dim]}
         assert ds.cf["X"].name == "x" and ds.cf["Y"].name == "y"
         assert ds.cf.cf_roles == {"trajectory_id": ["cluster"]}
 
@@ -296,42 +296,21 @@ def test_save_is_atomic(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_cluster_points(tmp_path):
-    ds = synthetic_dataset()
-    counts = ds["cluster_particles"].values
-    k = int(np.flatnonzero(counts)[2])
-    start = counts[:k].sum()
-    expected = np.stack([ds["x"].values, ds["y"].values], axis=1)[start:start + counts[k]]
-    np.testing.assert_array_equal(store.cluster_points(ds, k), expected)
-    where = {name.removeprefix("cluster_"): ds[name].values[k]
-             for name in ds.coords if name.startswith("cluster_")}
-    np.testing.assert_array_equal(store.cluster_points(ds, **where), expected)
-    parents = store.cluster_parents(ds, **where)
-    assert parents.dtype == np.int32
-    np.testing.assert_array_equal(parents, ds["parent"].values[start:start + counts[k]])
-    with pytest.raises(ValueError, match="matches 8 clusters"):
-        store.cluster_points(ds, model="lattice")
-    with pytest.raises(ValueError, match="colour: not a cluster parameter"):
-        store.cluster_points(ds, colour="red")
-    with pytest.raises(IndexError):
-        store.cluster_points(ds, 99)
-
-
 def test_one_cluster_file(tmp_path):
     points = np.array([[0, 0], [1, 0], [1, 1]])
     cluster = Cluster(points, np.array([0, 5, 7]), "boundary", resolve(size=16), parents=np.array([-1, 0, 1]))
     path = tmp_path / "one.nc"
     store.save(store.cluster_dataset(cluster, seed=4), path)
     ds = store.open_sweep(path)
-    np.testing.assert_array_equal(store.cluster_points(ds, 0), points)
+    np.testing.assert_array_equal(ragged.cluster_points(ds, 0), points)
     np.testing.assert_array_equal(dla.cluster_parents(ds, 0), [-1, 0, 1])
-    np.testing.assert_array_equal(store.read_cluster(ds, 0).parents, [-1, 0, 1])
+    np.testing.assert_array_equal(ragged.read_cluster(ds, 0).parents, [-1, 0, 1])
     older = ds.drop_vars("parent")  # a file written before parents were stored
-    assert store.read_cluster(older, 0).parents is None
+    assert ragged.read_cluster(older, 0).parents is None
     with pytest.raises(store.StoreError, match="parent: this file holds no parents"):
-        store.cluster_parents(older, 0)
+        ragged.cluster_parents(older, 0)
     assert ds["x"].dtype == np.int32 and int(ds["size"]) == 16 and bool(ds["jumps"])
-    assert store.STATUS_FLAGS[int(ds["status"][0])] == "boundary"
+    assert schema.STATUS_FLAGS[int(ds["status"][0])] == "boundary"
     ds.close()
 
 

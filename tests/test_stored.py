@@ -9,7 +9,7 @@ from conftest import TINY_SPEC
 from test_sweep import Interrupt, batches_of, interrupt_after
 
 import dlasweep as dla
-from dlasweep import branching, store
+from dlasweep import branching, ragged, store
 from dlasweep.fit import fit_mass_radius, growth_counts
 from dlasweep.parts import Parts, ResumeError
 from dlasweep.measure import radius_of_gyration
@@ -39,7 +39,7 @@ def clusters_of(ds):
     names = [c for c in ds.coords if c.startswith("cluster_")]
     ends = np.cumsum(ds["cluster_particles"].values)
     return {tuple(ds[c].values[i].item() for c in names):
-            (store.cluster_points(ds, i), ds["diffusion_time"].values[ends[i] - ds["cluster_particles"].values[i]:ends[i]])
+            (ragged.cluster_points(ds, i), ds["diffusion_time"].values[ends[i] - ds["cluster_particles"].values[i]:ends[i]])
             for i in range(ds.sizes["cluster"])}
 
 
@@ -113,7 +113,7 @@ def test_the_growth_history_is_every_prefix_s_rg(every):
     np.testing.assert_array_equal(full["history"].values, growth)
     spec = parse_spec(TINY_SPEC)
     for i, task in enumerate(spec.tasks()):
-        rg = radius_of_gyration(store.cluster_points(full, i))
+        rg = radius_of_gyration(ragged.cluster_points(full, i))
         row = full["radius_gyration_history"][dict(zip(["stickiness", "size", "seed"], task.index))].values
         grown = growth <= len(rg)
         np.testing.assert_array_equal(row[grown], rg[growth[grown] - 1])
@@ -136,7 +136,7 @@ def test_diffusion_statistics_equal_the_pooled_particles(every):
         times, depths = [], []
         for i in np.flatnonzero((full["cluster_stickiness"].values == full["stickiness"].values[config[0]])
                                 & (full["cluster_size"].values == full["size"].values[config[1]])):
-            points = store.cluster_points(full, i).astype(float)
+            points = ragged.cluster_points(full, i).astype(float)
             distance = np.sqrt(((points - points[0]) ** 2).sum(axis=1))
             depths.append(distance[1:] / max(distance.max(), 1.0))
             times.append(full["diffusion_time"].values[ends[i] - len(points):ends[i]][1:])

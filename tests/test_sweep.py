@@ -2,14 +2,11 @@
 
 import contextlib
 import functools
-import gc
 import errno
-import io
+import gc
 import json
 import os
-import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -23,20 +20,11 @@ import xarray as xr
 from distributed import Client, LocalCluster
 
 import dlasweep as dla
-from conftest import TINY_SPEC, files_under, science
-from dlasweep import boxes, measure, progress, store, sweep
+from conftest import TINY_SPEC, Interrupt, files_under, finished_clusters, interrupt_after, progress_lines, science
+from dlasweep import boxes, measure, progress, ragged, schema, store, sweep
 from dlasweep import task as worker
-from dlasweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
+from dlasweep.parts import Parts, ResumeError
 from dlasweep.spec import parse_spec
-
-
-@pytest.fixture(scope="module")
-def reference(tmp_path_factory, dask_client):
-    """The tiny sweep, run once on two in-process workers."""
-    out = tmp_path_factory.mktemp("reference") / "tiny.nc"
-    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    yield ds
-    ds.close()
 
 
 def test_clusters_and_measures_equal_direct_growth(reference):
@@ -44,8 +32,8 @@ def test_clusters_and_measures_equal_direct_growth(reference):
     for k, task in enumerate(spec.tasks()):
         seed = np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key)
         cluster = dla.grow(max(spec.counts), seed, **task.params)
-        np.testing.assert_array_equal(store.cluster_points(reference, k), cluster.points)
-        np.testing.assert_array_equal(store.cluster_parents(reference, k), cluster.parents)
+        np.testing.assert_array_equal(ragged.cluster_points(reference, k), cluster.points)
+        np.testing.assert_array_equal(ragged.cluster_parents(reference, k), cluster.parents)
         cell = reference.isel(dict(zip(["stickiness", "size", "seed"], task.index)))
         for j, n in enumerate(spec.counts):
             m = min(n, cluster.n)
@@ -56,7 +44,7 @@ def test_clusters_and_measures_equal_direct_growth(reference):
             np.testing.assert_equal(float(at["anisotropy"]), measure.anisotropy(cluster.points, [m])[0])
             _, counts = boxes.box_counts(cluster.points[:m], scales=reference["scale"].values)
             np.testing.assert_array_equal(at["box_count"].values, counts)
-            ok = store.STATUS_FLAGS[int(at["status"])] == "ok"
+            ok = schema.STATUS_FLAGS[int(at["status"])] == "ok"
             assert ok == (m == n) and (ok or cluster.status != "ok")
 
 
@@ -74,25 +62,6 @@ def test_one_worker_gives_the_same_results(reference):
     xr.testing.assert_identical(science(alone), science(reference))
 
 
-class Interrupt(BaseException):
-    """Stands for a kill: nothing in the sweep may catch it."""
-
-
-def interrupt_after(monkeypatch, n_clusters):
-    """Make the process die at the first part that would bring the saved clusters past n, as a kill would."""
-    written = []
-    real_write = Parts.write
-
-    def write(self, results):
-        if len(written) + len(results) > n_clusters:
-            raise Interrupt
-        real_write(self, results)
-        written.extend(results)
-
-    monkeypatch.setattr(Parts, "write", write)
-    return written
-
-
 def record_writes(monkeypatch):
     """The keys of the clusters saved, in order."""
     written = []
@@ -100,12 +69,6 @@ def record_writes(monkeypatch):
     monkeypatch.setattr(Parts, "write",
                         lambda self, results: (written.extend(results), real_write(self, results)))
     return written
-
-
-def finished_clusters(out):
-    """The keys of the clusters finished in the parts of ``out``."""
-    parts = Parts(Path(f"{out}.parts"))
-    return [key for key in parts.where if parts.finished(key)]
 
 
 def batches_of(monkeypatch, size):
@@ -168,18 +131,6 @@ def test_resume_computes_only_what_is_missing(before, after, tmp_path, dask_clie
     resumed.close()
 
 
-def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
-    out = tmp_path / "tiny.nc"
-    interrupt_after(monkeypatch, 2)
-    with pytest.raises(Interrupt):
-        dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    monkeypatch.undo()
-    changed = parse_spec(TINY_SPEC.replace("[20, 60, 150]", "[20, 60, 100]"))
-    with pytest.raises(ResumeError, match=r"grid.n_particles: \[20, 60, 150\] -> \[20, 60, 100\]"):
-        dla.run_sweep(changed, client=dask_client, out=out, resume=True)
-    assert len(finished_clusters(out)) == 2
-
-
 @pytest.mark.parametrize("size", [1, 5])
 def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_client, reference, monkeypatch,
                                                           replicate_1_fails):
@@ -187,7 +138,7 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_c
     batches_of(monkeypatch, size)  # 5: failed and finished clusters share parts
     with pytest.warns(RuntimeWarning, match="4 of 12 tasks failed"):
         ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    error = store.STATUS_FLAGS.index("error")
+    error = schema.STATUS_FLAGS.index("error")
     assert (ds["status"].sel(seed=1) == error).all() and (ds["status"].sel(seed=[0, 2]) != error).all()
     assert "task-0-0-1: RuntimeError: simulated failure" in ds.attrs["failed_tasks"]
     assert ds["cluster_particles"].values.reshape(2, 2, 3)[..., 1].sum() == 0
@@ -275,12 +226,12 @@ def test_early_stops_keep_their_status(dask_client):
         cluster = dla.grow(max(spec.counts), np.random.SeedSequence(spec.root_seed, spawn_key=task.spawn_key),
                            **task.params)
         final = ds.isel({**dict(zip(["stickiness", "size", "seed"], task.index)), "n_particles": -1})
-        assert store.STATUS_FLAGS[int(final["status"])] == cluster.status
+        assert schema.STATUS_FLAGS[int(final["status"])] == cluster.status
         assert int(final["n_grown"]) == int(ds["cluster_particles"][k]) == cluster.n
         # a count never reached is given the whole growth's seconds, which are at least those to any count
         seconds = ds["wall_time"].isel(dict(zip(["stickiness", "size", "seed"], task.index))).values
         assert (seconds > 0).all() and (np.diff(seconds) >= 0).all()
-    assert (ds["status"] == store.STATUS_FLAGS.index("step_limit")).any()
+    assert (ds["status"] == schema.STATUS_FLAGS.index("step_limit")).any()
 
 
 def test_an_unreachable_scheduler_leaves_nothing(tmp_path):
@@ -311,98 +262,6 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
     with dla.open_sweep(out) as ds:
         xr.testing.assert_identical(science(ds), science(reference))
     assert not Path(f"{out}.parts").exists()
-
-
-def test_a_part_cut_short_by_a_full_disk_leaves_no_temporary_file(tmp_path, dask_client, monkeypatch):
-    out = tmp_path / "tiny.nc"
-    real_savez = np.savez
-
-    def savez(file, **members):
-        if len(finished_clusters(out)) == 5:
-            file.write(b"PK half a part")
-            raise OSError(errno.ENOSPC, "No space left on device")
-        real_savez(file, **members)
-
-    monkeypatch.setattr(np, "savez", savez)
-    with pytest.raises(OSError, match="No space left"):
-        dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    parts = Path(f"{out}.parts")
-    assert len(finished_clusters(out)) == 5
-    assert sorted(p.name for p in parts.iterdir() if p.name not in (MANIFEST, LOCK)
-                  and not p.name.startswith("part-")) == []
-
-
-@contextlib.contextmanager
-def locked_by_another_process(folder):
-    """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""
-    code = "import sys, pathlib, dlasweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
-    holder = subprocess.Popen([sys.executable, "-c", code, str(folder)], stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE)
-    try:
-        assert holder.stdout.readline() == b"1\n"
-        yield holder
-    finally:
-        holder.kill()
-        holder.wait()
-
-
-@pytest.fixture
-def interrupted(tmp_path, dask_client, monkeypatch):
-    """The output of the tiny sweep, killed after five finished tasks."""
-    out = tmp_path / "tiny.nc"
-    with monkeypatch.context() as patch:
-        interrupt_after(patch, 5)
-        with pytest.raises(Interrupt):
-            dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
-    return out
-
-
-@pytest.mark.parametrize("resume", [[], ["--resume"]])
-def test_a_running_sweep_locks_out_a_second_one(resume, interrupted, run_cli, write_spec, dask_cluster):
-    parts = Path(f"{interrupted}.parts")
-    with locked_by_another_process(parts) as holder:
-        before = files_under(parts)
-        status, _, err = run_cli("sweep", write_spec(), "-o", interrupted, *resume,
-                                 "--scheduler", dask_cluster.scheduler_address)
-        assert files_under(parts) == before
-    assert status == 2 and len(err.strip().splitlines()) == 1
-    assert f"{parts}: in use by process {holder.pid} on " in err
-
-
-def test_the_lock_of_a_killed_run_is_taken_over(interrupted, dask_client, reference, monkeypatch):
-    parts = Path(f"{interrupted}.parts")
-    with locked_by_another_process(parts):
-        pass  # killed: its lock file stays, naming it
-    assert (parts / LOCK).exists()
-    holders = []
-    real_write = Parts.write
-    monkeypatch.setattr(Parts, "write", lambda self, results: (
-        holders.append((parts / LOCK).read_text()), real_write(self, results)))
-    resumed = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=interrupted, resume=True)
-    assert len(holders) == 7 and set(holders) == {f"process {os.getpid()} on {socket.gethostname()}"}
-    xr.testing.assert_identical(science(resumed), science(reference))
-    resumed.close()
-
-
-def test_the_lock_is_held_for_every_batch_and_the_final_file(tmp_path, dask_client, monkeypatch):
-    out = tmp_path / "t.nc"
-    parts = Path(f"{out}.parts")
-    spec = parse_spec(TINY_SPEC + "target_ci = 1e-4\nmax_seeds = 6\n")
-    held = []
-
-    def check(real):
-        def checked(*args):
-            with pytest.raises(ResumeError, match=f"in use by process {os.getpid()} "):
-                _lock(parts)
-            held.append(real.__name__)
-            return real(*args)
-        return checked
-
-    monkeypatch.setattr(Parts, "write", check(Parts.write))
-    monkeypatch.setattr(store.ParticleWriter, "finish", check(store.ParticleWriter.finish))
-    dla.run_sweep(spec, client=dask_client, out=out).close()
-    assert held == ["write"] * 24 + ["finish"]
-    assert files_under(tmp_path) == {Path("t.nc")}
 
 
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
@@ -521,53 +380,6 @@ def test_resume_after_kill_9(external_scheduler, slow_spec, slow_reference, tmp_
     assert not Path(f"{out}.parts").exists()
 
 
-@pytest.mark.parametrize("kept", [0, 1, 3])
-def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
-    # Results read back from what the run kept (none, the first part, all three) equal those read from disk.
-    spec = parse_spec(TINY_SPEC)
-    tasks = list(spec.tasks())
-    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
-    parts = Parts(tmp_path)
-    monkeypatch.setattr(Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
-    for batch in (tasks[:3], tasks[3:4], tasks[4:]):
-        parts.write({t.key: r for t, r in zip(batch, worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
-        if kept == 1:  # both budgets spent
-            parts._kept_bytes = dict.fromkeys(parts._kept_bytes, Parts.KEEP_BYTES)
-    assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())
-    keys = [t.key for t in tasks][::-1]
-    for names, release in ((("box_count", "radius_gyration_history", "status", "points.shape", "error"), False),
-                           (("points", "diffusion_time"), True), (("points", "diffusion_time"), False)):
-        from_disk = list(Parts(tmp_path).results(keys, names))
-        for a, b in zip(parts.results(keys, names, release=release), from_disk, strict=True):
-            assert a.keys() == b.keys()
-            for name in a:
-                np.testing.assert_array_equal(a[name], b[name])
-    # Released positions are read from the files from then on (the third pass).
-    assert not any("points" in k for k in parts._kept.values()) and (kept != 3 or parts._kept_bytes["clusters"] == 0)
-
-
-def test_parts_table_stacks_what_results_gives(tmp_path):
-    # The whole-part route of _assemble equals the result-by-result one: keys in any order, across parts,
-    # a failed result (its message longer than the first part's) replaced by a finished one in a later part.
-    spec = parse_spec(TINY_SPEC)
-    tasks = list(spec.tasks())
-    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
-    parts = Parts(tmp_path)
-    measured = dict(zip((t.key for t in tasks), worker.measure_tasks(tasks, counts, scales, 1, [True] * len(tasks))))
-    failed = worker.error_result(counts, len(scales), 2, "ValueError: " + "a long message " * 10)
-    parts.write({t.key: measured[t.key] for t in tasks[:2]})
-    parts.write({tasks[2].key: failed, tasks[3].key: failed, **{t.key: measured[t.key] for t in tasks[4:]}})
-    parts.write({tasks[3].key: measured[tasks[3].key]})
-    names = ("box_count", "radius_gyration_history", "status", "wall_time", "points.shape", "error")
-    # Kept in memory and from the files; the first part read has only empty messages, or the long one.
-    for reader, keys in ((parts, [t.key for t in tasks]), (Parts(tmp_path), [t.key for t in tasks][::-1])):
-        table = reader.table(keys, names)
-        for i, result in enumerate(reader.results(keys, names)):
-            for name in names:
-                np.testing.assert_array_equal(table[name][i], result[name])
-        assert [str(e) for e in table["error"]].count(str(failed["error"])) == 1
-
-
 @pytest.mark.parametrize("fails", [False, True])
 def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, monkeypatch, dask_client, fails):
     # gc.freeze() and a higher young threshold while the tasks run (the objects of the imports and the
@@ -603,28 +415,6 @@ def test_a_collector_switched_off_stays_off_during_a_sweep():
         assert gc.get_threshold()[0] == 0
     finally:
         gc.set_threshold(*thresholds)
-
-
-def progress_lines(text) -> list:
-    """The finished counts the progress lines in ``text`` give."""
-    return [int(n) for n in re.findall(r"^\w+ \d\d:\d\d:\d\d: (\d+)/\d+ clusters finished", text, re.M)]
-
-
-@pytest.mark.parametrize("seconds_each, shown", [
-    (0.5, [30, 40, 50, 60, 70, 80, 90, 100]),  # a line each 10% (10 clusters, 5 s)
-    (0.02, [70]),                              # 10% in 0.2 s: at most a line a second
-    (11.0, list(range(21, 31))),               # a line after each cluster: none for 10 s
-])
-def test_progress_lines_each_tenth_or_ten_seconds(seconds_each, shown, monkeypatch):
-    clock = [0.0]
-    monkeypatch.setattr(progress.time, "monotonic", lambda: clock[0])
-    log = io.StringIO()
-    with progress.Lines(100, initial=20, desc="quick", file=log) as lines:
-        for _ in range(10 if seconds_each > 10 else 80):
-            clock[0] += seconds_each
-            lines.update(1)
-    assert progress_lines(log.getvalue()) == shown
-    assert all(line.endswith(" left") for line in log.getvalue().splitlines() if "100/100" not in line)
 
 
 @pytest.mark.parametrize("on_terminal", [False, True])

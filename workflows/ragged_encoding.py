@@ -2,7 +2,7 @@
 
 Writes a sweep file of CLUSTERS clusters of N particles with ``store.save``
 (the clusters streamed, as a sweep writes them) for each zlib level and
-chunk size, then reads one cluster back with ``store.cluster_points``, as
+chunk size, then reads one cluster back with ``ragged.cluster_points``, as
 the report does. The clusters are SAMPLES real clusters grown once and
 repeated: every HDF5 chunk is compressed on its own, so a chunk of a
 repeated cluster compresses as one of a new cluster would.
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import dlasweep as dla
-from dlasweep import store
+from dlasweep import ragged, store
 from dlasweep.spec import parse_spec
 
 
@@ -59,7 +59,7 @@ def main(argv=None):
         for index in rng.integers(0, args.clusters, 5):
             start = time.perf_counter()
             with store.open_sweep(path) as back:
-                store.cluster_points(back, int(index))
+                ragged.cluster_points(back, int(index))
                 np.asarray(back["diffusion_time"][int(index) * args.n:(int(index) + 1) * args.n])
             reads.append(time.perf_counter() - start)
         size = path.stat().st_size
