@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import params as _params
-from ._jit import cached
 from .kernels import lattice, offlattice
 
 KERNELS = {"lattice": lattice.grow_lattice, "offlattice": offlattice.grow_offlattice}
@@ -95,7 +94,7 @@ def compiled(model: str) -> bool:
     Only this process's cache is looked at: the embedded cluster's too.
     """
     # The kernels name no entry kernel of their own yet: the one that takes most of the compile time.
-    return cached({"lattice": lattice.grow._grow_each, "offlattice": offlattice.grow._grow_each}[model])
+    return {"lattice": lattice.grow.compiled, "offlattice": offlattice.grow.compiled}[model]()
 
 
 def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:

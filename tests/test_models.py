@@ -1,6 +1,9 @@
 """One invariant suite over every model and variant of ``dla.grow``."""
 
 import importlib
+import os
+import subprocess
+import sys
 import time
 
 import naive
@@ -231,3 +234,15 @@ def test_diffusion_times_are_four_bytes_and_saturate():
     assert [int(diffusion_time(k)) for k in (0, 7, MOST_STEPS - 1, MOST_STEPS, MOST_STEPS + 1, 1 << 40)] == [
         0, 7, MOST_STEPS - 1, MOST_STEPS, MOST_STEPS, MOST_STEPS]
     assert dla.grow(300, seed=1).steps.dtype == STEPS_DTYPE == dla.grow(300, seed=1, model="offlattice").steps.dtype
+
+
+def test_compiled_reads_numba_s_cache_of_each_growth_kernel(tmp_path):
+    """``grow.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
+    where numba's cache is empty."""
+    growth = importlib.import_module("dlasweep.grow")
+    dla.grow(20, seed=1), dla.grow(20, seed=1, model="offlattice")
+    assert growth.compiled("lattice") and growth.compiled("offlattice")
+    code = "import importlib; g = importlib.import_module('dlasweep.grow'); print(g.compiled('lattice'), g.compiled('offlattice'))"
+    fresh = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    assert fresh.stdout.split() == ["False", "False"]

@@ -19,7 +19,7 @@ exactly (Poisson kernel) instead of wandering off.
 
 import numpy as np
 
-from ..._jit import clock, jit
+from ..._jit import cached, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
@@ -646,3 +646,8 @@ def grow_lattice(n, p, marks, rngs, times=None):
     period = model.size if model.seed_shape == codes.LINE else 0
     return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)
             for pts, st, count, *rest in zip(points, steps, counts, statuses, times, seconds)]
+
+
+def compiled() -> bool:
+    """Whether numba's on-disk cache holds this growth kernel (most of its compile time)."""
+    return cached(_grow_each)

@@ -12,7 +12,7 @@ it moves by ``RAY`` with an exact ray cast (``contact``).
 
 import numpy as np
 
-from ..._jit import clock, jit
+from ..._jit import cached, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
@@ -577,3 +577,8 @@ def grow_offlattice(n, p, marks, rngs, times=None):
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     return [grown(*result) for result in _grow_each(int(n), model_from(p), np.asarray(marks, np.int64), list(rngs),
                                                      times)]
+
+
+def compiled() -> bool:
+    """Whether numba's on-disk cache holds this growth kernel (most of its compile time)."""
+    return cached(_grow_each)
