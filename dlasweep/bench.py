@@ -18,20 +18,21 @@ import numpy as np
 import xarray as xr
 
 from . import store
+from .schema import Variable
 
 MIB = "2^20 byte"
 """The units of memory sizes (MiB, which udunits does not know)."""
 
 BENCH_SCHEMA = {
-    "seconds": store.Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
-    "n_grown": store.Variable(("run",), np.int64, "1", "particles attached"),
-    "walk_steps": store.Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
+    "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
+    "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
+    "walk_steps": Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
     # MiB, in words udunits reads
-    "peak_memory": store.Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
-    "added_memory": store.Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
-    "n": store.Variable(("run",), np.int64, "1", "target particle count"),
-    "model": store.Variable(("run",), str, None, "model and dimension"),
-    "method": store.Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
+    "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
+    "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
+    "n": Variable(("run",), np.int64, "1", "target particle count"),
+    "model": Variable(("run",), str, None, "model and dimension"),
+    "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
 }
 """The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
 its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""

@@ -21,7 +21,6 @@ from . import params as _params
 from ._version import __version__
 from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns,
                      ragged_dtype)
-from .schema import Variable  # noqa: F401 (bench.BENCH_SCHEMA still takes it from here)
 
 def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
     """Assemble a sweep's results into the layout of README, "The dataset", clusters aside.
