@@ -252,13 +252,13 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
     # the field against brute force (images included where the sides are periodic)
-    W, fs, cap = gi[9], 1 << ol.FS, gi[17]
+    W, fs, cap = gi[ol.MAP_WIDTH], 1 << ol.FS, gi[ol.FIELD_CAP]
     fw = (W + fs - 1) // fs
     images = [np.zeros(dim)]
     if line:
         images = [np.r_[np.array(s, float), 0.0] for s in np.ndindex(*(3,) * (dim - 1))]
         images = [(e - np.r_[np.ones(dim - 1), 0.0]) * np.r_[np.full(dim - 1, size), 0.0] for e in images]
-    off = gi[6:6 + dim]
+    off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
     unit = np.concatenate([np.floor(pts + e).astype(int) + off for e in images])
     occupied = np.unique(unit[((unit >= 0) & (unit < W)).all(1)] // fs, axis=0)
     cellsxyz = np.stack(np.meshgrid(*[np.arange(fw)] * dim, indexing="ij"), -1).reshape(-1, dim)

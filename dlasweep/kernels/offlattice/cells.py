@@ -7,13 +7,9 @@ unit-cell occupancy is never needed off-lattice) and a coarse Chebyshev
 distance field (a byte per cell of side ``2**FS``, capped at ``FCAP`` cells)
 bound the distance to the nearest particle from below (``map_dist``).
 
-The grid's geometry is two small arrays built by ``_layout``:
-
-gi: 0-2 index cells per axis, 3-5 tiles per axis, 6-8 map offsets,
-    9 map width, 10-12 periodic axes, 13 tile bits, 14 tiles used,
-    15 largest usable map level, 16 covered half-width (point) or height (line),
-    17 distance field cap (coarse cells), 18 most levels of the distance pyramid
-gf: 0-2 index origin, 3-5 index inverse cell side, 6 period
+The grid's geometry is two small arrays built by ``_layout``, ``gi``
+(integers) and ``gf`` (floats), read through the named slots below (numba
+freezes them into the kernels as constants).
 
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
 field)`` that ``build_grid`` returns.
@@ -35,74 +31,93 @@ GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
 INF = np.inf
 
+# Slots of gi, the grid's integer geometry (a mutable array: the cell list counts its tiles in it).
+CELLS = 0  # 0-2: cell-list cells per axis
+TILES = 3  # 3-5: cell-list tiles per axis
+MAP_OFFSET = 6  # 6-8: where coordinate 0 falls in the maps, per axis
+MAP_WIDTH = 9  # cells a side of the maps
+PERIODIC = 10  # 10-12: 1 on a substrate's periodic axes
+TILE_SHIFT = 13  # cell-list tiles have 2**TILE_SHIFT cells a side
+TILES_USED = 14  # cell-list tiles allocated
+TOP_LEVEL = 15  # largest usable map level
+COVERED = 16  # half-width (point seeds) or height (substrate) the grid covers
+FIELD_CAP = 17  # the distance field's cap, in coarse cells
+PYRAMID_LEVELS = 18  # most levels of the distance pyramid
+GI_SLOTS = 19
+# Slots of gf, the grid's float geometry.
+ORIGIN = 0  # 0-2: the cell list's origin per axis
+INV_SIDE = 3  # 3-5: inverse cell side per axis
+PERIOD = 6  # a substrate's period
+GF_SLOTS = 8
+
 
 @jit
 def _layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
     for point seeds, h_max for a substrate), with room to grow."""
-    gi = np.zeros(19, np.int64)
-    gf = np.zeros(8)
+    gi = np.zeros(GI_SLOTS, np.int64)
+    gf = np.zeros(GF_SLOTS)
     tb = 3 if dim == 2 else 2
-    gi[13] = tb
+    gi[TILE_SHIFT] = tb
     up = dim - 1
-    gf[6] = float(size)
+    gf[PERIOD] = float(size)
     if not line:
         half = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
         if size > 0:
             half = min(half, ((size // 2 + 8) // 16 + 1) * 16)
-        gi[16] = half
-        gi[9] = 2 * half
-        gi[15] = 1 << 30
-        gi[17] = FCAP[dim - 2]
-        gi[18] = 64
+        gi[COVERED] = half
+        gi[MAP_WIDTH] = 2 * half
+        gi[TOP_LEVEL] = 1 << 30
+        gi[FIELD_CAP] = FCAP[dim - 2]
+        gi[PYRAMID_LEVELS] = 64
         for a in range(dim):
-            gi[a] = half
-            gi[6 + a] = half
-            gf[a] = -float(half)
-            gf[3 + a] = 0.5
+            gi[CELLS + a] = half
+            gi[MAP_OFFSET + a] = half
+            gf[ORIGIN + a] = -float(half)
+            gf[INV_SIDE + a] = 0.5
     else:
         top = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
-        gi[16] = top
-        gi[9] = max(size + 2 * LINE_PAD, top + 2)
-        gi[15] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
-        gi[17] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
-        gi[18] = 1  # so the field alone: a coarser level would reach beyond the pad
+        gi[COVERED] = top
+        gi[MAP_WIDTH] = max(size + 2 * LINE_PAD, top + 2)
+        gi[TOP_LEVEL] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
+        gi[FIELD_CAP] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
+        gi[PYRAMID_LEVELS] = 1  # so the field alone: a coarser level would reach beyond the pad
         m = size // 2
         for a in range(up):
-            gi[a] = m
-            gi[6 + a] = LINE_PAD
-            gi[10 + a] = 1
-            gf[a] = 0.0
-            gf[3 + a] = m / float(size)
-        gi[up] = (top + 2) // 2 + 1
-        gi[6 + up] = 2
-        gf[up] = -2.0
-        gf[3 + up] = 0.5
+            gi[CELLS + a] = m
+            gi[MAP_OFFSET + a] = LINE_PAD
+            gi[PERIODIC + a] = 1
+            gf[ORIGIN + a] = 0.0
+            gf[INV_SIDE + a] = m / float(size)
+        gi[CELLS + up] = (top + 2) // 2 + 1
+        gi[MAP_OFFSET + up] = 2
+        gf[ORIGIN + up] = -2.0
+        gf[INV_SIDE + up] = 0.5
     for a in range(3):
         if a >= dim:
-            gi[a] = 1
-            gi[3 + a] = 1
+            gi[CELLS + a] = 1
+            gi[TILES + a] = 1
         else:
-            gi[3 + a] = (gi[a] + (1 << tb) - 1) >> tb
+            gi[TILES + a] = (gi[CELLS + a] + (1 << tb) - 1) >> tb
     return gi, gf
 
 
 @jit
 def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     """Push particle i on its cell's list; returns heads (grown if needed)."""
-    c0 = min(max(int(np.floor((pts[i, 0] - gf[0]) * gf[3])), 0), gi[0] - 1)
-    c1 = min(max(int(np.floor((pts[i, 1] - gf[1]) * gf[4])), 0), gi[1] - 1)
+    c0 = min(max(int(np.floor((pts[i, 0] - gf[ORIGIN]) * gf[INV_SIDE])), 0), gi[CELLS] - 1)
+    c1 = min(max(int(np.floor((pts[i, 1] - gf[ORIGIN + 1]) * gf[INV_SIDE + 1])), 0), gi[CELLS + 1] - 1)
     c2 = 0
     if dim == 3:
-        c2 = min(max(int(np.floor((pts[i, 2] - gf[2]) * gf[5])), 0), gi[2] - 1)
-    tb = gi[13]
+        c2 = min(max(int(np.floor((pts[i, 2] - gf[ORIGIN + 2]) * gf[INV_SIDE + 2])), 0), gi[CELLS + 2] - 1)
+    tb = gi[TILE_SHIFT]
     m = (1 << tb) - 1
-    t = (c0 >> tb) + gi[3] * ((c1 >> tb) + gi[4] * (c2 >> tb))
+    t = (c0 >> tb) + gi[TILES] * ((c1 >> tb) + gi[TILES + 1] * (c2 >> tb))
     loc = (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
     tile = dirr[t]
     if tile < 0:
-        tile = gi[14]
-        gi[14] += 1
+        tile = gi[TILES_USED]
+        gi[TILES_USED] += 1
         if (tile + 1) * 64 > len(heads):
             bigger = maps.filled(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
             bigger[: len(heads)] = heads
@@ -118,23 +133,23 @@ def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
 def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
     """Mark particle i in the maps and the field, with its periodic images
     near the edges."""
-    W = gi[9]
-    reach = 1 if gi[10] == 1 else 0
+    W = gi[MAP_WIDTH]
+    reach = 1 if gi[PERIODIC] == 1 else 0
     reach2 = reach if dim == 3 else 0
     for a in range(-reach, reach + 1):
         for b in range(-reach2, reach2 + 1):
-            i0 = int(np.floor(pts[i, 0] + a * size)) + gi[6]
-            i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[7]
-            i2 = int(np.floor(pts[i, 2])) + gi[8] if dim == 3 else 0
+            i0 = int(np.floor(pts[i, 0] + a * size)) + gi[MAP_OFFSET]
+            i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[MAP_OFFSET + 1]
+            i2 = int(np.floor(pts[i, 2])) + gi[MAP_OFFSET + 2] if dim == 3 else 0
             if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
                 # a coarse cell that already holds a particle has every level from
                 # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
                 fw = (W + (1 << FS) - 1) >> FS
                 ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
-                fresh = field[maps.field_cell(dim, fw, ci, cj, ck)] != gi[17]
+                fresh = field[maps.field_cell(dim, fw, ci, cj, ck)] != gi[FIELD_CAP]
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
                 if fresh:
-                    maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[17], gi[17], gi[18])
+                    maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[FIELD_CAP], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
 
 
 @jit
@@ -172,11 +187,11 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     """Maps and cell list for particles 0..count-1, sized for ``need``, with
     room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
     gi, gf = _layout(dim, line, size, need)
-    words, start, blocks, cells = _allocate_maps(dim, gi[9])
-    ntiles = gi[3] * gi[4] * gi[5]
+    words, start, blocks, cells = _allocate_maps(dim, gi[MAP_WIDTH])
+    ntiles = gi[TILES] * gi[TILES + 1] * gi[TILES + 2]
     dirr = maps.filled(ntiles, -1, np.int32)
     heads = maps.filled(64 * (tiles + tiles // 4 + 64), -1, np.int32)
-    field = maps.pyramid_allocate(dim, gi[9], gi[17], gi[18])
+    field = maps.pyramid_allocate(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
     for i in range(count):
         heads = insert(i, pts, nxt, dim, gi, gf, dirr, heads)
         mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
@@ -215,34 +230,34 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     the distance pyramid above the field bounds instead of the maps
     (``pyramid_dist``). (``_walk`` spells this out inline.)
     """
-    W = gi[9]
+    W = gi[MAP_WIDTH]
     x0 = w[0]
     x1 = w[1]
-    if gi[10] == 1:
+    if gi[PERIODIC] == 1:
         x0 = x0 - size * np.floor(x0 / size)
         if dim == 3:
             x1 = x1 - size * np.floor(x1 / size)
-    X0 = x0 + gi[6]
-    X1 = x1 + gi[7]
-    X2 = w[2] + gi[8] if dim == 3 else 0.0
+    X0 = x0 + gi[MAP_OFFSET]
+    X1 = x1 + gi[MAP_OFFSET + 1]
+    X2 = w[2] + gi[MAP_OFFSET + 2] if dim == 3 else 0.0
     if not (0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
     fw = (W + (1 << FS) - 1) >> FS
-    fd = gi[17] - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
+    fd = gi[FIELD_CAP] - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
     dm = 0.0
     if fd > 1:
         side = float(1 << FS)
         f = face_gap(X0, X1, X2, dim, FS)
         dm = (fd - 1) * side + f
-    if 1 < fd < gi[17]:
+    if 1 < fd < gi[FIELD_CAP]:
         return dm
-    if fd >= gi[17] and gi[18] > 1:
-        pstart = maps.pyramid_starts(dim, W, gi[17], gi[18])
-        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[17], maps.pyramid_low(dim, gi[17])))
+    if fd >= gi[FIELD_CAP] and gi[PYRAMID_LEVELS] > 1:
+        pstart = maps.pyramid_starts(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS])
+        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[FIELD_CAP], maps.pyramid_low(dim, gi[FIELD_CAP])))
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
-    lo, hi = 0, min(len(cells) - 1, gi[15]) + 1  # clear at lo, set at hi
+    lo, hi = 0, min(len(cells) - 1, gi[TOP_LEVEL]) + 1  # clear at lo, set at hi
     while hi - lo > 1:
         s = (lo + hi) >> 1
         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
@@ -265,16 +280,16 @@ def walk_geometry(gi, cells, dim):
     """The grid's constants that ``walk_bound`` takes, worked out once per walk:
     (periodic, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low): ``pstart`` the
     distance pyramid's level starts, ``low`` its ``maps.pyramid_low``."""
-    ftop = min(len(cells) - 1, gi[15]) + 1
-    fcap = gi[17]
+    ftop = min(len(cells) - 1, gi[TOP_LEVEL]) + 1
+    fcap = gi[FIELD_CAP]
     # a field at its cap puts every particle (cap - 1) coarse cells away, so
     # the map levels whose 3**dim blocks fit inside that are clear
     flo = 1
     while flo + 1 < ftop and (2 << (flo + 1)) <= (fcap - 1) << FS:
         flo += 1
-    fw = (gi[9] + (1 << FS) - 1) >> FS
-    return (gi[10] == 1, float(gi[6]), float(gi[7]), float(gi[8]), float(gi[9]), fw, fcap, flo, ftop,
-            maps.pyramid_starts(dim, gi[9], fcap, gi[18]), maps.pyramid_low(dim, fcap))
+    fw = (gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
+    return (gi[PERIODIC] == 1, float(gi[MAP_OFFSET]), float(gi[MAP_OFFSET + 1]), float(gi[MAP_OFFSET + 2]), float(gi[MAP_WIDTH]), fw, fcap, flo, ftop,
+            maps.pyramid_starts(dim, gi[MAP_WIDTH], fcap, gi[PYRAMID_LEVELS]), maps.pyramid_low(dim, fcap))
 
 
 @jit
@@ -373,15 +388,15 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     r2 = r * r
     nl = 0
     near2 = INF
-    lo0, hi0 = _span(c[0], r, gi[0], gi[10] == 1, gf[0], gf[3])
-    lo1, hi1 = _span(c[1], r, gi[1], gi[11] == 1, gf[1], gf[4])
+    lo0, hi0 = _span(c[0], r, gi[CELLS], gi[PERIODIC] == 1, gf[ORIGIN], gf[INV_SIDE])
+    lo1, hi1 = _span(c[1], r, gi[CELLS + 1], gi[PERIODIC + 1] == 1, gf[ORIGIN + 1], gf[INV_SIDE + 1])
     lo2, hi2 = 0, 0
     if dim == 3:
-        lo2, hi2 = _span(c[2], r, gi[2], False, gf[2], gf[5])
-    p0 = gi[10] == 1
-    p1 = gi[11] == 1
-    n0, n1, t0, t1 = gi[0], gi[1], gi[3], gi[4]
-    tb = gi[13]
+        lo2, hi2 = _span(c[2], r, gi[CELLS + 2], False, gf[ORIGIN + 2], gf[INV_SIDE + 2])
+    p0 = gi[PERIODIC] == 1
+    p1 = gi[PERIODIC + 1] == 1
+    n0, n1, t0, t1 = gi[CELLS], gi[CELLS + 1], gi[TILES], gi[TILES + 1]
+    tb = gi[TILE_SHIFT]
     m = (1 << tb) - 1
     half = 0.5 * size
     for k2 in range(lo2, hi2 + 1):
@@ -425,6 +440,6 @@ def no_grid():
     """An empty grid: the caller drops its old grid's arrays by taking this
     before it builds the new one (in a later pass of its loop; see the package docstring)."""
     z = np.zeros(1, np.int64)
-    return (np.zeros(19, np.int64), np.zeros(8), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
+    return (np.zeros(GI_SLOTS, np.int64), np.zeros(GF_SLOTS), np.zeros(0, np.uint64), z, z, z, np.zeros(0, np.int32),
             np.zeros(0, np.int32), np.zeros(0, np.uint8))
 

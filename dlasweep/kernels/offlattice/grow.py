@@ -18,8 +18,10 @@ from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
+    COVERED,
     FS,
     INF,
+    TILES_USED,
     build_grid,
     face_gap,
     gather,
@@ -350,8 +352,8 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
     geo[2] = max(geo[2], w[up])
     count += 1
     need = geo[2] if line else geo[1]
-    if need + 8.0 > gi[16]:
-        return count, grid, gi[14]
+    if need + 8.0 > gi[COVERED]:
+        return count, grid, gi[TILES_USED]
     heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
     mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
     return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
