@@ -29,6 +29,10 @@ FCAP = (16, 4)
 bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap."""
 GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
+HEADS_RESERVE = 2.0
+"""The cell list's heads are reserved for this many times the tiles the cluster would hold after
+growing by ``GROW``: its pages cost memory only once a tile is used (``maps.zeroed``), and a
+cell list that outgrows them is copied, the old and new held at once."""
 INF = np.inf
 
 # Slots of gi, the grid's integer geometry (a mutable array: the cell list counts its tiles in it).
@@ -114,18 +118,18 @@ def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     m = (1 << tb) - 1
     t = (c0 >> tb) + gi[TILES] * ((c1 >> tb) + gi[TILES + 1] * (c2 >> tb))
     loc = (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
-    tile = dirr[t]
+    tile = dirr[t] - 1
     if tile < 0:
         tile = gi[TILES_USED]
         gi[TILES_USED] += 1
-        if (tile + 1) * 64 > len(heads):
-            bigger = maps.filled(len(heads) + len(heads) // 2, -1, np.int32)  # 1.5x: old and new are held at once
+        if (tile + 1) * 64 > len(heads):  # beyond build_grid's reserve: rare
+            bigger = maps.zeroed(len(heads) + len(heads) // 2, np.int32)
             bigger[: len(heads)] = heads
             heads = bigger
-        dirr[t] = tile
+        dirr[t] = tile + 1
     h = tile * 64 + loc
-    nxt[i] = heads[h]
-    heads[h] = i
+    nxt[i] = heads[h] - 1
+    heads[h] = i + 1
     return heads
 
 
@@ -189,8 +193,8 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     gi, gf = _layout(dim, line, size, need)
     words, start, blocks, cells = _allocate_maps(dim, gi[MAP_WIDTH])
     ntiles = gi[TILES] * gi[TILES + 1] * gi[TILES + 2]
-    dirr = maps.filled(ntiles, -1, np.int32)
-    heads = maps.filled(64 * (tiles + tiles // 4 + 64), -1, np.int32)
+    dirr = maps.zeroed(ntiles, np.int32)
+    heads = maps.zeroed(64 * (int(HEADS_RESERVE * GROW ** dim * tiles) + 64), np.int32)
     field = maps.pyramid_allocate(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
     for i in range(count):
         heads = insert(i, pts, nxt, dim, gi, gf, dirr, heads)
@@ -404,10 +408,10 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
             c1 = k1 % n1 if p1 else k1
             for k0 in range(lo0, hi0 + 1):
                 c0 = k0 % n0 if p0 else k0
-                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))]
+                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))] - 1
                 if tile < 0:
                     continue
-                h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))]
+                h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))] - 1
                 while h >= 0:
                     d0 = pts[h, 0] - c[0]
                     d1 = pts[h, 1] - c[1]
