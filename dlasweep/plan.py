@@ -20,10 +20,9 @@ from .fit import growth_counts
 from .spec import Spec, SpecError
 from .task import sweep_scales
 
-KERNEL_BYTES = {("lattice", 2): 34, ("offlattice", 2): 49, ("lattice", 3): 123, ("offlattice", 3): 70}
+KERNEL_BYTES = {("lattice", 2): 23, ("offlattice", 2): 38, ("lattice", 3): 31, ("offlattice", 3): 53}
 """Memory a growing cluster takes per particle, by model and dim: the memory ``dlasweep bench --full``
-added growing 10^7 particles (results/bench/bench.txt: 340, 454, 1234 and 656 MB), and off the lattice
-4 bytes of the parents (the lattice finds them after growth, its grids freed, in less)."""
+added growing 10^7 particles, parents included (results/bench/bench.txt: 216, 360, 287 and 501 MB)."""
 MEASURE_COPIES = 2
 """Copies of a grown cluster's positions its measures hold at once (box counting's bitmaps, the
 prefixes' radii), beside the kernel's own."""
