@@ -105,7 +105,7 @@ def test_a_walk_that_would_not_end_is_refused(options, named, tmp_path):
     ("seeds = 2\n[run]\ntarget_ci = 1e-7\nmax_seeds = 1e7",
      r"run.max_seeds: the sweep needs about .* of (memory|disk)"),
     ("seeds = 64\n[run]\nworkers = 64\n[model]\ndim = 3",
-     r"grid.n_particles: the sweep needs about [\d.]+ TB of memory, .* \(64 clusters of up to 100,000,000 "
+     r"grid.n_particles: the sweep needs about [\d.]+ [GT]B of memory, .* \(64 clusters of up to 100,000,000 "
      r"particles\)"),
 ])
 def test_a_sweep_that_cannot_run_is_refused_before_anything_is_written(lines, named, tmp_path):
