@@ -16,7 +16,8 @@ from dlasweep.kernels.lattice.exits import (
     symmetry,
     unit_moves,
 )
-from dlasweep.kernels.lattice.words import FIELD_CAP, fine3
+from dlasweep.kernels.lattice.grow import _distance_bound, _release
+from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -239,6 +240,85 @@ def test_pyramid_bounds_the_distance_and_finds_its_sharpest_level_from_every_gue
             assert bound >= max(each) - side
             if value < cap:
                 assert truth - bound < 2 * side
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("where", ["circle", "plane", "box", "box above a plane"])
+def test_release_puts_walkers_uniformly_where_they_start(dim, where):
+    """4000 walkers released with ``_release``: on the launch circle
+    (sphere), at the launch height above a substrate, on the box's surface
+    (a substrate's box: its top), uniformly there: per axis the mean and
+    the mean square of a uniform law (within about 5 standard errors), and
+    for the box each face hit about equally often."""
+    rng = np.random.default_rng(11)
+    line, box = "plane" in where, "box" in where
+    size, launch_r = 20, 37.5
+    box_lo, box_hi = (0, size - 1) if line else (-(size // 2), size - 1 - size // 2)
+    pos = np.zeros((4000, 3))
+    for p in pos:
+        _release(rng, dim, line, box, size, box_lo, box_hi, launch_r, p)
+    assert (pos[:, dim:] == 0).all()
+    x = pos[:, :dim]
+    up = dim - 1
+    if box:
+        assert (x == np.round(x)).all() and (x >= box_lo).all() and (x <= box_hi).all()
+    if where == "circle":
+        np.testing.assert_allclose(np.sqrt((x**2).sum(1)), launch_r)
+        spread = launch_r / np.sqrt(dim)  # each axis: mean 0, mean square launch_r**2 / dim
+        np.testing.assert_allclose(x.mean(0), 0, atol=5 * spread / np.sqrt(len(x)))
+        np.testing.assert_allclose((x**2).mean(0), spread**2, rtol=0.05)
+    elif line:
+        assert (x[:, up] == (box_hi if box else launch_r)).all()
+        across = x[:, :up]
+        assert (across >= 0).all() and (across < size).all()
+        np.testing.assert_allclose(across.mean(0), (size - 1 if box else size) / 2, atol=5 * size / np.sqrt(12 * len(x)))
+    else:
+        on = (x == box_lo) | (x == box_hi)
+        assert on.any(1).all()
+        faces = np.concatenate([(x == box_lo).sum(0), (x == box_hi).sum(0)])
+        # its own face, or another axis's uniform site on this one
+        expected = len(x) * (1 / (2 * dim) + (1 - 1 / dim) / size)
+        np.testing.assert_allclose(faces, expected, rtol=0.15)
+
+
+@pytest.mark.parametrize("dim, width", [(2, 512), (3, 96)])
+def test_distance_bound_is_zero_near_the_cluster_and_a_lower_bound_beyond(dim, width):
+    """``_distance_bound`` (which ``_grow`` spells out) on random clusters,
+    against the brute-force Chebyshev distance to the nearest particle: 0
+    within two sites (and only within three, the level-1 cells' reach), else
+    at least 3 and at most the truth, exact up to 4 sites (the words), 5 off
+    the grid; the same from every level the walker's last bound came from."""
+    rng = np.random.default_rng(7 + dim)
+    off = width // 2
+    cap = FIELD_CAP[dim]
+    low = maps.pyramid_low(dim, cap)
+    levels = maps.pyramid_starts(dim, width, cap)
+    fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
+    cube = np.zeros(27, np.uint64)
+    hubs = rng.integers(-off // 3, off // 3, (5, dim))
+    sites = hubs[rng.integers(0, 5, 1500)] + np.rint(rng.normal(0, 6, (1500, dim))).astype(np.int64)
+    sites = sites[(np.abs(sites) <= off - 5).all(1)]  # as in _grow, every particle 4 sites inside the grid
+    points = np.unique(sites, axis=0).astype(np.int32)
+    words, start, blocks, _, field = rebuild(points, len(points), dim, width, off, 0)
+    scale = rng.choice([1.0, 3.0, 12.0, 60.0, 200.0], 3000)
+    seen = set()
+    for q in np.rint(points[rng.integers(0, len(points), 3000)] + rng.normal(0, 1, (3000, dim)) * scale[:, None]):
+        truth = np.abs(points - q).max(1).min()
+        ijk = [int(x) + off for x in q] + [off] * (3 - dim)
+        found = {_distance_bound(words, field, levels, cube, dim, width, blocks[0], start[1], blocks[1], fw0, cap, low,
+                                 level, *ijk)[0] for level in range(len(levels) - 1)}
+        assert len(found) == 1, (q, found)
+        d = found.pop()
+        if not all(0 <= x < width for x in ijk):
+            assert d == 5
+            seen.add("off the grid")
+        elif d == 0:
+            assert truth <= 3, (q, truth)
+            seen.add("near")
+        else:
+            assert truth > 2 and 3 <= d <= truth and (d == truth or truth > 4), (q, d, truth)
+            seen.add("exact" if d == truth else "bound")
+    assert seen == {"near", "exact", "bound", "off the grid"}
 
 
 def test_jumps_grow_the_clusters_single_steps_grow():

@@ -115,6 +115,10 @@ def test_the_lattice_walks_single_step_is_touches_and_step_to_spelled_out():
     assert copy(lattice_grow._grow, "step_to") == body(lattice_grow.step_to)
 
 
+def test_the_lattice_walks_distance_bound_is_distance_bound_spelled_out():
+    assert copy(lattice_grow._grow, "_distance_bound") == body(lattice_grow._distance_bound)
+
+
 @pytest.mark.parametrize("dim, moore, line", [(2, False, False), (2, True, False), (3, False, False),
                                               (3, True, False), (2, False, True), (3, False, True)])
 def test_touches_and_step_to_are_near_step(dim, moore, line):
