@@ -1,6 +1,6 @@
 """The off-lattice grid: a cell list of the particles and the hierarchical maps.
 
-A cell list (cells of side 2 in tiles of 64 cells, allocated only where
+A cell list (cells of side ``CELL_SIDE`` in tiles of 64 cells, allocated only where
 particles are, so memory follows the cluster) answers which particles lie
 near a point (``gather``). The dilated maps of ``maps`` (levels 1 and up:
 unit-cell occupancy is never needed off-lattice) and a coarse Chebyshev
@@ -27,6 +27,11 @@ FS = maps.FIELD_SHIFT
 FCAP = (16, 4)
 """Cap of the distance field (coarse cells), 2D and 3D; beyond it the maps
 bound. A new coarse cell costs (2 cap - 1)**dim updates, hence 3D's small cap."""
+CELL_SIDE = 4
+"""Side of the cell list's cells (diameters). A side of 4 puts four times the area under a tile's 64
+heads: memory added by growth, 2D 1e7 37.8 -> 29.3 B/particle, 3D 3e5 53.4 -> 44.8, against a side
+of 2, with the same particles gathered (the same clusters) in the same time (2D 1e6, A/B: 10.53 s
+against 10.61)."""
 GROW = 1.3
 """Growth factor of the grids when the cluster outgrows them."""
 HEADS_RESERVE = 2.0
@@ -75,10 +80,10 @@ def _layout(dim, line, size, need):
         gi[FIELD_CAP] = FCAP[dim - 2]
         gi[PYRAMID_LEVELS] = 64
         for a in range(dim):
-            gi[CELLS + a] = half
+            gi[CELLS + a] = 2 * half // CELL_SIDE
             gi[MAP_OFFSET + a] = half
             gf[ORIGIN + a] = -float(half)
-            gf[INV_SIDE + a] = 0.5
+            gf[INV_SIDE + a] = 1.0 / CELL_SIDE
     else:
         top = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
         gi[COVERED] = top
@@ -86,17 +91,17 @@ def _layout(dim, line, size, need):
         gi[TOP_LEVEL] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
         gi[FIELD_CAP] = LINE_PAD >> FS  # likewise the field's reach, (cap - 1) * 2**FS + 2**(FS-1) < LINE_PAD
         gi[PYRAMID_LEVELS] = 1  # so the field alone: a coarser level would reach beyond the pad
-        m = size // 2
+        m = max(size // CELL_SIDE, 1)
         for a in range(up):
             gi[CELLS + a] = m
             gi[MAP_OFFSET + a] = LINE_PAD
             gi[PERIODIC + a] = 1
             gf[ORIGIN + a] = 0.0
             gf[INV_SIDE + a] = m / float(size)
-        gi[CELLS + up] = (top + 2) // 2 + 1
+        gi[CELLS + up] = (top + 2) // CELL_SIDE + 1
         gi[MAP_OFFSET + up] = 2
         gf[ORIGIN + up] = -2.0
-        gf[INV_SIDE + up] = 0.5
+        gf[INV_SIDE + up] = 1.0 / CELL_SIDE
     for a in range(3):
         if a >= dim:
             gi[CELLS + a] = 1
