@@ -19,6 +19,7 @@ from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, 
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     COVERED,
+    FIELD_CAP,
     FS,
     INF,
     TILES_USED,
@@ -355,7 +356,7 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
     if need + 8.0 > gi[COVERED]:
         return count, grid, gi[TILES_USED]
     heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
-    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
+    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
     return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
 
 
