@@ -55,6 +55,36 @@ def _neighbour_list():
 
 
 @jit
+def _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
+    """Put a new walker at w: uniformly on the launch circle (sphere), on the
+    launch line (plane) above a substrate, or, with ``launch_box``, on the
+    box's faces (its top face above a substrate). Returns the stream state
+    (registers: see ``walk.xdir``)."""
+    up = dim - 1
+    hb = 0.5 * size
+    if launch_box:
+        if line:
+            for a in range(up):
+                w[a] = rng.random() * size
+            w[up] = size - 1.0
+        else:
+            face = int(rng.random() * 2 * dim)
+            for a in range(dim):
+                w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
+            w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
+    elif line:
+        for a in range(up):
+            w[a] = rng.random() * size
+        w[up] = launch_r
+    else:
+        s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+        w[0] = launch_r * u0
+        w[1] = launch_r * u1
+        w[2] = launch_r * u2
+    return s0, s1, s2, s3
+
+
+@jit
 def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi,
           pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
@@ -102,26 +132,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
-        # ---- release
-        if launch_box:
-            if line:
-                for a in range(up):
-                    w[a] = rng.random() * size
-                w[up] = size - 1.0
-            else:
-                face = int(rng.random() * 2 * dim)
-                for a in range(dim):
-                    w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
-                w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
-        elif line:
-            for a in range(up):
-                w[a] = rng.random() * size
-            w[up] = launch_r
-        else:
-            s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
-            w[0] = launch_r * u0
-            w[1] = launch_r * u1
-            w[2] = launch_r * u2
+        s0, s1, s2, s3 = _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3)
         list_ok = False
         nl = 0
         while True:
