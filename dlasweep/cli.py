@@ -31,7 +31,7 @@ from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
 from .progress import follow, growth_bar, steps_bar
 from .report import ReportFolderError, earlier_report, report
 from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
-from .store import one_line as _one_line
+from .schema import one_line as _one_line
 from .parts import Interrupted, ResumeError
 from .sweep import embedded_threads, run_sweep, scheduler_address
 

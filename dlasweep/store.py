@@ -19,8 +19,9 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
-from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns,
-                     ragged_dtype)
+from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, one_line,
+                     ragged_columns, ragged_dtype)
+
 
 def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
     """Assemble a sweep's results into the layout of README, "The dataset", clusters aside.
@@ -460,8 +461,3 @@ def provenance(function) -> str:
 
 def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def one_line(err) -> str:
-    """An exception's message on one line (its type's name when it has none): error messages stay one line."""
-    return " ".join(str(err).split()) or err.__class__.__name__

@@ -13,7 +13,7 @@ import itertools
 
 import numpy as np
 
-from . import measure, schema, store
+from . import measure, schema
 from .boxes import default_scales
 from .fit import growth_counts
 from .grow import grow, grow_many
@@ -96,4 +96,4 @@ def error_result(counts, n_scales, dim, message) -> dict:
     result = {name: schema.blank(name, shapes.get(name, n_counts)) for name in (*schema.SCIENCE, "wall_time")}
     result["status"][:] = Status.error
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": schema.blank("diffusion_time", 0),
-            "parent": schema.blank("parent", 0), "error": np.array(store.one_line(message))}
+            "parent": schema.blank("parent", 0), "error": np.array(schema.one_line(message))}

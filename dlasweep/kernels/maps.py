@@ -327,9 +327,9 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
 
 
 @jit
-def pyramid_fill(pyramid, dim, width, cap):
-    """``_fill`` on every level of the pyramid."""
-    start = pyramid_starts(dim, width, cap)
+def pyramid_fill(pyramid, dim, width, cap, most=64):
+    """``_fill`` on every level of the pyramid (of at most ``most`` levels)."""
+    start = pyramid_starts(dim, width, cap, most)
     for level in range(len(start) - 1):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         _fill(pyramid[start[level]:start[level + 1]], dim, (width + (1 << shift) - 1) >> shift, cap)

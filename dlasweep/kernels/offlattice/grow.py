@@ -19,6 +19,7 @@ from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, 
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     COVERED,
+    FIELD_CAP,
     FS,
     INF,
     TILES_USED,
@@ -51,6 +52,36 @@ GAUSS_JUMP = 4.0
 def _neighbour_list():
     """Empty arrays for ``cells.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
     return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
+
+
+@jit
+def _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
+    """Put a new walker at w: uniformly on the launch circle (sphere), on the
+    launch line (plane) above a substrate, or, with ``launch_box``, on the
+    box's faces (its top face above a substrate). Returns the stream state
+    (registers: see ``walk.xdir``)."""
+    up = dim - 1
+    hb = 0.5 * size
+    if launch_box:
+        if line:
+            for a in range(up):
+                w[a] = rng.random() * size
+            w[up] = size - 1.0
+        else:
+            face = int(rng.random() * 2 * dim)
+            for a in range(dim):
+                w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
+            w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
+    elif line:
+        for a in range(up):
+            w[a] = rng.random() * size
+        w[up] = launch_r
+    else:
+        s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+        w[0] = launch_r * u0
+        w[1] = launch_r * u1
+        w[2] = launch_r * u2
+    return s0, s1, s2, s3
 
 
 @jit
@@ -101,26 +132,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
-        # ---- release
-        if launch_box:
-            if line:
-                for a in range(up):
-                    w[a] = rng.random() * size
-                w[up] = size - 1.0
-            else:
-                face = int(rng.random() * 2 * dim)
-                for a in range(dim):
-                    w[a] = (2.0 * rng.random() - 1.0) * (hb - 1.0)
-                w[face >> 1] = (hb - 1.0) if face & 1 else -(hb - 1.0)
-        elif line:
-            for a in range(up):
-                w[a] = rng.random() * size
-            w[up] = launch_r
-        else:
-            s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
-            w[0] = launch_r * u0
-            w[1] = launch_r * u1
-            w[2] = launch_r * u2
+        s0, s1, s2, s3 = _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3)
         list_ok = False
         nl = 0
         while True:
@@ -355,7 +367,7 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
     if need + 8.0 > gi[COVERED]:
         return count, grid, gi[TILES_USED]
     heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
-    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
+    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
     return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
 
 
