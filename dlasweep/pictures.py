@@ -7,7 +7,8 @@ What a picture shows:
   as scatter markers leave white seams at sub-pixel sizes). A panel with
   fewer pixels than sites shows blocks of sites, a pixel coloured when any
   site in it is occupied.
-* An off-lattice cluster is disks (spheres) at their true size.
+* An off-lattice cluster is disks (spheres) at their true size; where a
+  disk is smaller than a pixel, it is drawn as sites are, a pixel per block.
 * A 3D cluster is drawn as an engineering drawing: the top view (x-y) above
   the side view (x-z), the other side view (y-z) beside it, at one scale.
   Each shows depth: nearer particles hide farther ones, which fade towards
@@ -122,8 +123,9 @@ def draw_points(ax, points, lattice, inches, rasterized=True, *, view=(0, 1), pa
     ax.set_aspect("equal")
     ax.set_axis_off()
     span = frame[h, 1] - frame[h, 0]
-    if n and lattice:
-        _site_image(ax, points, view, frame[[h, v], 0], span, round(inches * ax.figure.dpi))
+    pixels = round(inches * ax.figure.dpi)
+    if n and (lattice or span > pixels):  # disks below a pixel: blocks, as sites (10^8 disks: no scatter)
+        _site_image(ax, points, view, frame[[h, v], 0], span, pixels)
     elif n:
         keys = (np.arange(n),)  # the last attached drawn last ...
         near = None
@@ -173,10 +175,11 @@ SITE_CHUNK = 1 << 22
 
 
 def _site_image(ax, sites, view, low, span, pixels):
-    """Occupied sites as an image of at most ``pixels`` across, a pixel per block of sites.
+    """Occupied sites (or disks' centres) as an image of at most ``pixels`` across, a pixel per block.
 
-    ``low`` are the frame's lower edges (half-integers). Of the sites
-    sharing a pixel the nearest shows (3D), and of those the last attached.
+    ``low`` are the frame's lower edges (half-integers for sites). Of the
+    sites sharing a pixel the nearest shows (3D), and of those the last
+    attached.
     """
     n, dim = sites.shape
     h, v = view

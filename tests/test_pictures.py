@@ -152,3 +152,25 @@ def test_sites_placed_a_chunk_at_a_time_show_as_placed_at_once(dim, monkeypatch,
     whole, chunks = imread(tmp_path / "whole.png"), imread(tmp_path / "chunks.png")
     assert len(np.unique(whole.reshape(-1, whole.shape[-1]), axis=0)) > 50  # the sites' colours, many per pixel
     np.testing.assert_array_equal(whole, chunks)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_disks_below_a_pixel_are_drawn_as_blocks_and_larger_ones_as_disks(dim):
+    """Off the lattice, a picture whose pixels are wider than a disk shows a pixel per block of centres,
+    as for sites (a 1e8 cluster in bounded memory); with disks of a pixel or more, every disk."""
+    import matplotlib.pyplot as plt
+
+    c = dla.grow(20000 if dim == 2 else 3000, seed=5, model="offlattice", dim=dim)
+    for inches, blocks in ((1.0 if dim == 2 else 0.3, True), (12.0, False)):
+        fig, ax = plt.subplots(figsize=(inches, inches), dpi=100)
+        draw_points(ax, c.points, False, inches, view=(0, 1))
+        assert bool(ax.images) == blocks and bool(ax.collections) != blocks
+        if blocks:
+            image = ax.images[0]
+            x0, x1, y0, _ = image.get_extent()
+            shown = image.get_array()[..., 3] > 0
+            side = (x1 - x0) / shown.shape[1]
+            centres = np.zeros_like(shown)
+            centres[((c.points[:, 1] - y0) // side).astype(int), ((c.points[:, 0] - x0) // side).astype(int)] = True
+            np.testing.assert_array_equal(shown, centres)  # a pixel is coloured where, and only where, a centre is
+        plt.close(fig)
