@@ -20,9 +20,9 @@ from .fit import growth_counts
 from .spec import Spec, SpecError
 from .task import sweep_scales
 
-KERNEL_BYTES = {("lattice", 2): 23, ("offlattice", 2): 38, ("lattice", 3): 31, ("offlattice", 3): 53}
+KERNEL_BYTES = {("lattice", 2): 23, ("offlattice", 2): 33, ("lattice", 3): 31, ("offlattice", 3): 42}
 """Memory a growing cluster takes per particle, by model and dim: the memory ``dlasweep bench --full``
-added growing 10^7 particles, parents included (results/bench/bench.txt: 216, 360, 287 and 501 MB)."""
+added growing 10^7 particles, parents included (results/bench/bench.txt: 216, 314, 287 and 401 MB)."""
 MEASURE_COPIES = 2
 """Copies of a grown cluster's positions its measures hold at once (box counting's bitmaps, the
 prefixes' radii), beside the kernel's own."""
