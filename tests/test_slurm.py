@@ -45,7 +45,7 @@ DLASWEEP = Path(sys.executable).with_name("dlasweep")
 
 QUICK = ROOT / "workflows" / "quick.toml"
 TASKS = 8
-"""SLOW_SPEC's dask tasks: eight clusters of 1e5, each worth more than one task's TASK_SECONDS."""
+"""SLOW_SPEC's dask tasks: eight clusters of 3e5, each worth more than one task's TASK_SECONDS."""
 
 INTERRUPTED = "finished tasks are kept, continue with --resume"
 

@@ -282,12 +282,14 @@ BIN = Path(sys.executable).parent
 SLOW_SPEC = """\
 name = "slow"
 [grid]
-n_particles = [1000, 100000]
+n_particles = [1000, 300000]
 seeds = 8
 [run]
 root_seed = 5
 """
-"""Eight clusters of about half a second each: time to kill something mid-sweep."""
+"""Eight clusters of about 1.3 s each: after a test sees the first one finished, the sweep still has
+seconds to run (on 2 threads), so a kill or a Ctrl-C then lands mid-sweep. With clusters of 1e5 (0.4 s)
+the whole sweep once finished before the signal arrived on a loaded CI machine."""
 
 
 def spawn(*argv, log):
