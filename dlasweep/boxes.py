@@ -4,7 +4,7 @@ Pure functions of an ``(n, dim)`` point array (dim 2 or 3) in attachment
 order; no I/O. Lengths are in lattice units (off-lattice: particle diameters).
 ``box_counts`` measures one set, ``prefix_box_counts`` every prefix of one
 at once: both with one traversal (``_count_prefix``), compiled, releasing the
-GIL; the grids too large for a bitmap (sparse sets, not clusters) are then
+GIL; the grids of sparse sets too large to count in bands of rows are then
 counted by sorting their boxes (``PrefixBoxes.finish``).
 """
 
@@ -54,17 +54,22 @@ def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
 
 _BITMAP_CAP = 1 << 31
 """Most bits (256 MiB) a stack of bitmaps (a side's grids, or its strips) may take; a grid larger than this
-alone is counted by sorting its boxes."""
+alone is counted in bands of its rows."""
+
+_BANDS_MOST = 64
+"""Most bands a grid is counted in (a pass over the particles each); a grid that needs more belongs to a
+sparse set, whose boxes are sorted instead."""
 
 _STRIP_WORDS_PER_SITE = 2
 """Integer sites are put in strips when a strip has fewer words than this per site. Measured: a grid costs
 about 4 ns a site when marked from the sites, 1.7 ns a strip word when merged from the strips."""
 
-ROUTES = ("one box", "halved", "strips of sites", "one pass", "a few grids a pass", "sorted")
+ROUTES = ("one box", "halved", "strips of sites", "one pass", "a few grids a pass", "sorted", "bands")
 """How a side is counted, by code (``PrefixBoxes.routes``): the set fits one box; its grids halved from those
 of half the side; merged from strips of sites; marked from the particles in one pass, or a few grids a pass;
-too large for a bitmap, its boxes sorted."""
-ONE_BOX, HALVED, STRIPS, ONE_PASS, PASSES, SORTED = range(len(ROUTES))
+a grid too large for a bitmap, in bands of its rows, a pass each; a sparse set's grid that would need more
+than ``_BANDS_MOST`` bands, its boxes sorted."""
+ONE_BOX, HALVED, STRIPS, ONE_PASS, PASSES, SORTED, BANDS = range(len(ROUTES))
 
 _EVEN = np.uint64(0x5555555555555555)
 """The even bits of a word."""
@@ -95,17 +100,25 @@ def _ordered(points, high):
 
 
 @jit
-def _first_axis_order(points, top):
-    """``points`` sorted by the integer part of the first coordinate (a stable counting sort)."""
+def _shifted(points, low, ordered, top):
+    """``points - low``, a new array; when ``ordered``, sorted by the integer part of the first coordinate
+    (a stable counting sort up to ``top``). One copy of a prefix, not two: at 1e7 particles and more
+    the measurement must stay within the memory the growth needed."""
+    out = np.empty_like(points)
+    if not ordered:
+        for i in range(len(points)):
+            for a in range(points.shape[1]):
+                out[i, a] = points[i, a] - low[a]
+        return out
     start = np.zeros(top + 2, np.int64)
     for i in range(len(points)):
-        start[np.int64(np.floor(points[i, 0])) + 1] += 1
+        start[np.int64(np.floor(points[i, 0] - low[0])) + 1] += 1
     for c in range(1, top + 2):
         start[c] += start[c - 1]
-    out = np.empty_like(points)
     for i in range(len(points)):
-        c = np.int64(np.floor(points[i, 0]))
-        out[start[c]] = points[i]
+        c = np.int64(np.floor(points[i, 0] - low[0]))
+        for a in range(points.shape[1]):
+            out[start[c], a] = points[i, a] - low[a]
         start[c] += 1
     return out
 
@@ -150,7 +163,7 @@ def _mark_sites(points, offsets, scale, cells, strips):
 
 
 @jit
-def _mark_boxes(points, offsets, scale, radius, shape, first, bitmaps, out):
+def _mark_boxes(points, offsets, scale, radius, shape, first, bitmaps, out, row0=0):
     """Set the bit of every box a particle touches in grids ``first``, ``first + 1``, ...; count the visits.
 
     Grid g has boxes of side ``scale`` and its corner at -1/2 - offsets[i]
@@ -159,7 +172,8 @@ def _mark_boxes(points, offsets, scale, radius, shape, first, bitmaps, out):
     particle in the one box holding its centre; ``radius > 0`` in every box
     its ball overlaps. ``shape`` is the grids' shape on three axes (see
     ``_slab``): ``bitmaps[k]`` is grid ``first + k``'s bitmap, a row per box
-    of the leading axes (row-major), a bit per box of the last axis. With no
+    of the leading axes (row-major), a bit per box of the last axis, its
+    rows those from ``row0`` on (boxes in other rows are left out). With no
     ``bitmaps`` grid ``first``'s every visit (its box on the three axes) is
     written to ``out`` instead.
     """
@@ -201,7 +215,9 @@ def _mark_boxes(points, offsets, scale, radius, shape, first, bitmaps, out):
                         d1 = d0 + gap2[1, j1] if e1 else d0
                         if e1 and d1 >= r2:
                             continue
-                        row = box[0, j0, e0] * shape[1] + box[1, j1, e1]
+                        row = box[0, j0, e0] * shape[1] + box[1, j1, e1] - row0
+                        if len(bitmaps) > 0 and not 0 <= row < bitmaps.shape[1]:
+                            continue
                         for j2 in range(max(-base, 0), min(grids - base, many)):
                             for e2 in range(reach[2, j2]):
                                 if e2 and d1 + gap2[2, j2] >= r2:
@@ -393,9 +409,10 @@ def box_counts(points, lattice: bool = True, scales=None, offsets: int = 4):
     side's grids are halved from those of half the side while their bitmaps
     fit ``_BITMAP_CAP`` together, else marked from the particles (integer
     sites in strips, one per offset, that the grids are merged from, when
-    that is cheaper; else as many grids a pass as the cap allows); grids too
-    large for a bitmap alone are counted by sorting their boxes. ``ROUTES``
-    names these ways; each gives the same count.
+    that is cheaper; else as many grids a pass as the cap allows); a grid too
+    large for a bitmap alone is counted in bands of its rows (a sparse set's,
+    by sorting its boxes). ``ROUTES`` names these ways; each gives the same
+    count.
 
     Parameters
     ----------
@@ -453,7 +470,9 @@ class PrefixBoxes:
     """
 
     def __init__(self, points, ends, lattice, scales, offsets):
-        p = checked_points(points)
+        # int32 sites (the lattice kernel's) are kept as they are: a copy of a
+        # 1e8 cluster would cost more memory than its growth left free
+        p = checked_points(points, np.int32 if np.asarray(points).dtype == np.int32 else None)
         if offsets < 1:
             raise ValueError(f"offsets: {offsets} is below 1")
         ends = np.array([len(p)] if ends is None else ends, np.int64).ravel()
@@ -470,7 +489,7 @@ class PrefixBoxes:
         self.counts = np.ones((len(ends), len(self.scales)), np.int64)
         self.routes = np.zeros((len(ends), len(self.scales)), np.int8)
         integer = p.dtype.kind == "i"
-        if integer:  # from the low corner, exactly: each prefix is shifted again to its own
+        if integer and p.dtype != np.int32:  # from the low corner, exactly: each prefix is shifted again to its own
             p = p - low
             if extent < 2**31:
                 p = p.astype(np.int32)  # half the memory traffic
@@ -483,7 +502,7 @@ class PrefixBoxes:
         self.finish()
 
     def finish(self):
-        """Count the grids ``_prefix_counts`` left (-1: too large for a bitmap) by sorting their boxes."""
+        """Count the grids ``_prefix_counts`` left (-1: a sparse set's, too large for bands) by sorting their boxes."""
         sides, own, n_own = self.plan[:3]
         for c, k in zip(*np.nonzero(self.counts < 0)):
             self.counts[c, k] = _sorted_count(self.args[0][: self.ends[c]], sides[k], own[k, : n_own[k]], self.radius)
@@ -575,7 +594,7 @@ def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, pare
     """``counts[c]``: the counts of ``points[:ends[c]]``, and ``routes[c]`` how each side was counted.
 
     ``counts`` comes filled with ones (the sides a prefix fits in); a side
-    whose grids are too large for a bitmap is left at -1 (``PrefixBoxes.finish``).
+    whose grids are left to sorting is left at -1 (``PrefixBoxes.finish``).
     """
     for c in range(len(ends)):
         _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift, cap,
@@ -591,15 +610,12 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
     for i in range(n):
         for a in range(dim):
             low[a] = min(low[a], prefix[i, a])
-    points = np.empty_like(prefix)
     high = np.zeros(dim, prefix.dtype)
     for i in range(n):
         for a in range(dim):
-            points[i, a] = prefix[i, a] - low[a]
-            high[a] = max(high[a], points[i, a])
+            high[a] = max(high[a], prefix[i, a] - low[a])
     extent = float(high.max()) + 2 * _HALF
-    if _ordered(points, high):
-        points = _first_axis_order(points, np.int64(high[0]))
+    points = _shifted(prefix, low, _ordered(prefix, high), np.int64(high[0]))
     pad = 3 - dim
     kids = np.zeros(len(sides), np.int64)  # of each side, those below the extent
     for k in range(len(sides)):
@@ -660,8 +676,22 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                     count = _coarsen(strips, (cells[0], cells[1], cells[2]), merge, moved,
                                      (side if dim == 3 else 1, side, 1), stack, (shape[0], shape[1], shape[2]))
             elif per_pass == 0:
-                route[k] = SORTED  # counted by ``PrefixBoxes.finish``; count stays -1
+                row_words = (shape[2] + 63) // 64
+                rows, band = shape[0] * shape[1], cap // (64 * row_words)
                 stack = np.empty((0, 0, 0), np.uint64)
+                if band == 0 or rows > band * _BANDS_MOST:
+                    route[k] = SORTED  # counted by ``PrefixBoxes.finish``; count stays -1
+                else:
+                    route[k] = BANDS
+                    bits = np.empty((1, band, row_words), np.uint64)
+                    for g in range(grids):
+                        total = 0
+                        for row0 in range(0, rows, band):
+                            bits[:] = 0
+                            _mark_boxes(points, offsets, float(side), radius, (shape[0], shape[1], shape[2]), g, bits,
+                                        np.empty((0, 0), np.int64), row0)
+                            total += _least_count(bits)
+                        count = total if count < 0 else min(count, total)
             else:
                 route[k] = ONE_PASS if per_pass >= grids else PASSES
                 for first in range(0, grids, per_pass):

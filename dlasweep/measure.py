@@ -19,7 +19,10 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
 
     Equal, bit for bit, to the functions it gathers (a test holds them
     together); one call instead of five keeps a thread's Python time per
-    cluster small next to the growth of a small cluster.
+    cluster small next to the growth of a small cluster. It reads the points
+    as they are (int32 sites, float64 centres) and keeps no array of a value
+    per particle: at 1e7 particles and more, the measurement must stay
+    within the memory the growth needed.
 
     Parameters
     ----------
@@ -41,10 +44,9 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
     history = np.asarray(history, np.int64).ravel()
     if history.size and history.min() < 1:
         raise ValueError("history: expected prefix lengths >= 1")
-    positions = np.ascontiguousarray(boxes.points, dtype=np.float64)
-    rg, rg_history, radius, shape = np.empty(len(boxes.ends)), np.empty(len(history)), np.empty(len(boxes.ends)), \
-        np.empty(len(boxes.ends))
-    _cluster_measures(positions, boxes.ends, history, rg, rg_history, radius, shape, *boxes.args)
+    n_ends = len(boxes.ends)
+    rg, rg_history, radius, shape = np.empty(n_ends), np.empty(len(history)), np.empty(n_ends), np.empty(n_ends)
+    _cluster_measures(boxes.points, boxes.ends, history, rg, rg_history, radius, shape, *boxes.args)
     boxes.finish()
     return {"box_count": boxes.counts, "radius_gyration": rg, "radius_gyration_history": rg_history,
             "max_radius": radius, "anisotropy": shape}
@@ -54,33 +56,45 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
 def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, points, box_ends, integer, box_radius,
                       sides, own, n_own, order, parent, part, shift, cap, strip_words, counts, routes):
     """``cluster_measures``' figures, into the arrays given (the box counts as ``_prefix_counts`` leaves them)."""
-    gyration = _prefix_gyration(positions)
-    distances = _distances(positions)
-    for c in range(1, len(distances)):
-        distances[c] = max(distances[c], distances[c - 1])
-    for c in range(len(ends)):
-        rg[c], radius[c] = gyration[ends[c] - 1], distances[ends[c] - 1]
+    past = history > len(positions)
+    _prefix_radii(positions, ends, rg, radius)
+    _prefix_radii(positions, np.minimum(history, len(positions)), rg_history, np.empty(len(history)))
     for c in range(len(history)):
-        rg_history[c] = gyration[history[c] - 1] if history[c] <= len(gyration) else np.nan
-    shape[:] = _anisotropy(positions, ends)
+        if past[c]:
+            rg_history[c] = np.nan
+    shape[:] = _anisotropy(positions, ends, MEDIAN_GATHER)
     _prefix_counts(points, box_ends, integer, box_radius, sides, own, n_own, order, parent, part, shift, cap,
                    strip_words, counts, routes)
 
 
 @jit
-def _prefix_gyration(points):
+def _prefix_radii(points, lengths, rg, radius):
+    """The radius of gyration and the largest distance from the first point (the seed) of the prefixes of
+    ``lengths`` (each in 1..n, in any order), into ``rg`` and ``radius``: one pass, no array per point.
+
+    Rg by Welford's update of the running mean and sum of squares (each
+    increment is delta**2 * k/(k+1) >= 0: no cancellation), in float64.
+    """
     n, dim = points.shape
+    order = np.argsort(lengths)
     mean = np.zeros(dim)
-    spread = 0.0
-    out = np.empty(n)
+    spread, farthest = 0.0, 0.0
+    at = 0
     for k in range(n):
+        if at == len(order):
+            break
+        r2 = 0.0
         for a in range(dim):
-            delta = points[k, a] - mean[a]
+            x = float(points[k, a])
+            delta = x - mean[a]
             mean[a] += delta / (k + 1)
-            # Welford: each increment is delta**2 * k/(k+1) >= 0, no cancellation.
-            spread += delta * (points[k, a] - mean[a])
-        out[k] = np.sqrt(spread / (k + 1))
-    return out
+            spread += delta * (x - mean[a])
+            r2 += (x - float(points[0, a])) ** 2
+        farthest = max(farthest, np.sqrt(r2))
+        while at < len(order) and lengths[order[at]] == k + 1:
+            rg[order[at]] = np.sqrt(spread / (k + 1))
+            radius[order[at]] = farthest
+            at += 1
 
 
 def radius_of_gyration(points) -> np.ndarray:
@@ -99,22 +113,7 @@ def radius_of_gyration(points) -> np.ndarray:
     -------
     ndarray of float64, (n,)
     """
-    return _prefix_gyration(np.ascontiguousarray(checked_points(points, np.float64)))
-
-
-def _seed_distances(points) -> np.ndarray:
-    return _distances(np.ascontiguousarray(checked_points(points, np.float64)))
-
-
-@jit
-def _distances(points):
-    out = np.empty(len(points))
-    for i in range(len(points)):
-        r2 = 0.0
-        for a in range(points.shape[1]):
-            r2 += (points[i, a] - points[0, a]) ** 2
-        out[i] = np.sqrt(r2)
-    return out
+    return _every_prefix(points)[0]
 
 
 def max_radius(points) -> np.ndarray:
@@ -124,7 +123,15 @@ def max_radius(points) -> np.ndarray:
     -------
     ndarray of float64, (n,)
     """
-    return np.maximum.accumulate(_seed_distances(points))
+    return _every_prefix(points)[1]
+
+
+def _every_prefix(points):
+    """``_prefix_radii`` of every prefix: (rg, radius)."""
+    p = np.ascontiguousarray(checked_points(points, np.float64))
+    rg, radius = np.empty(len(p)), np.empty(len(p))
+    _prefix_radii(p, np.arange(1, len(p) + 1), rg, radius)
+    return rg, radius
 
 
 def anisotropy(points, counts) -> np.ndarray:
@@ -154,31 +161,91 @@ def anisotropy(points, counts) -> np.ndarray:
     counts = np.asarray(counts, dtype=np.int64)
     if counts.size and not (1 <= counts.min() and counts.max() <= len(p)):
         raise ValueError(f"counts: expected prefix lengths in 1..{len(p)}")
-    return _anisotropy(np.ascontiguousarray(p), counts.ravel()).reshape(counts.shape)
+    return _anisotropy(np.ascontiguousarray(p), counts.ravel(), MEDIAN_GATHER).reshape(counts.shape)
+
+
+MEDIAN_GATHER = 1 << 16
+"""``_kth_smallest`` sorts the candidates once at most this many are left."""
 
 
 @jit
-def _anisotropy(points, counts):
+def _squared_distance_and_quartic(points, i):
+    """|u|**2 of point i from the seed, and sum_a u_a**4 / |u|**4: ``_anisotropy``'s two figures of it."""
+    r2, quartic = 0.0, 0.0
+    for a in range(points.shape[1]):
+        u2 = (float(points[i, a]) - float(points[0, a])) ** 2
+        r2 += u2
+        quartic += u2 * u2
+    return r2, quartic / r2**2
+
+
+@jit
+def _anisotropy(points, counts, gather):
     dim = points.shape[1]
-    top = counts.max() if len(counts) else 1
-    r2, quartic = np.zeros(top), np.zeros(top)
-    for i in range(1, top):
-        for a in range(dim):
-            u2 = (points[i, a] - points[0, a]) ** 2
-            r2[i] += u2
-            quartic[i] += u2 * u2
-        quartic[i] /= r2[i] ** 2
     isotropic = 3.0 / (dim + 2)
     out = np.full(len(counts), np.nan)
     for c in range(len(counts)):
         m = counts[c]
         if m > 1:
-            median = np.median(r2[1:m])
+            # the median of the m - 1 squared distances, as np.median takes it
+            half = (m - 1) // 2
+            median = _kth_smallest(points, m, half, gather)
+            if (m - 1) % 2 == 0:
+                median = (_kth_smallest(points, m, half - 1, gather) + median) / 2
             total, outer = 0.0, 0
             for i in range(1, m):
-                if r2[i] >= median:
-                    total += quartic[i]
+                r2, quartic = _squared_distance_and_quartic(points, i)
+                if r2 >= median:
+                    total += quartic
                     outer += 1
             if outer:
                 out[c] = (total / outer - isotropic) / (1 - isotropic)
     return out
+
+
+@jit
+def _kth_smallest(points, m, k, gather):
+    """The k-th smallest (from 0) squared distance from the seed of points 1..m-1, exactly, without an
+    array of them all: histograms narrow the range of values that holds it until at most ``gather``
+    remain, which are then sorted. Bins are monotone in the value, so whole bins below it only count."""
+    bins = 4096
+    lo, hi = np.inf, -np.inf
+    for i in range(1, m):
+        r2, _ = _squared_distance_and_quartic(points, i)
+        lo, hi = min(lo, r2), max(hi, r2)
+    below, inside = 0, m - 1  # values under lo; values within [lo, hi]
+    hist = np.zeros(bins, np.int64)
+    while True:
+        if lo == hi:
+            return lo
+        if inside <= gather:
+            break
+        scale = bins / (hi - lo)
+        if not np.isfinite(scale):  # a range too narrow to split
+            break
+        hist[:] = 0
+        for i in range(1, m):
+            r2, _ = _squared_distance_and_quartic(points, i)
+            if lo <= r2 <= hi:
+                hist[min(np.int64((r2 - lo) * scale), bins - 1)] += 1
+        b, under = 0, below
+        while under + hist[b] <= k:
+            under += hist[b]
+            b += 1
+        new_lo, new_hi = np.inf, -np.inf
+        for i in range(1, m):
+            r2, _ = _squared_distance_and_quartic(points, i)
+            if lo <= r2 <= hi and min(np.int64((r2 - lo) * scale), bins - 1) == b:
+                new_lo, new_hi = min(new_lo, r2), max(new_hi, r2)
+        if hist[b] == inside:  # no narrower: sort them all
+            break
+        below, inside, lo, hi = under, hist[b], new_lo, new_hi
+    values = np.empty(inside)
+    j = 0
+    for i in range(1, m):
+        r2, _ = _squared_distance_and_quartic(points, i)
+        if lo <= r2 <= hi:
+            values[j] = r2
+            j += 1
+    values.sort()
+    return values[k - below]

@@ -78,6 +78,7 @@ ROUTES = {
     "every grid in one pass": ({"_STRIP_WORDS_PER_SITE": 0}, boxes.ONE_PASS),
     "grids a few at a time": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 12}, boxes.PASSES),
     "boxes sorted": ({"_BITMAP_CAP": 0}, boxes.SORTED),
+    "a grid in bands of rows": ({"_STRIP_WORDS_PER_SITE": 0, "_BITMAP_CAP": 1 << 10}, boxes.BANDS),
 }
 
 
@@ -387,6 +388,42 @@ def test_anisotropy_of_arms_along_axes_and_diagonals(directions, expected):
     arms = np.array(directions, float)
     points = np.r_[np.zeros((1, arms.shape[1])), np.concatenate([arms * k for k in range(1, 21)])]
     assert anisotropy(points, [len(points)])[0] == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize("gather", [1, 7, 1 << 16])
+@pytest.mark.parametrize("kind", ["lattice ties", "random", "one value", "two values", "a narrow range"])
+def test_kth_smallest_squared_distance_is_the_sorted_ones(kind, gather):
+    # The anisotropy's median without an array of every distance: histograms narrow the range until
+    # ``gather`` values are left. Against a sort, every k, on sets with many ties (lattice sites), a
+    # single value, two, and values a few ulps apart (no histogram splits them: they are sorted).
+    rng = np.random.default_rng(3)
+    points = {"lattice ties": rng.integers(-6, 7, (400, 2)),
+              "random": rng.normal(size=(300, 3)),
+              "one value": np.array([[0, 0]] + [[3, 4], [4, 3], [-5, 0], [0, 5]] * 20),
+              "two values": np.array([[0.0, 0.0]] + [[1.0, 0.0], [0.0, 2.0]] * 30),
+              "a narrow range": np.c_[1.0 + np.arange(50) * 2.0**-52, np.zeros(50)]}[kind]
+    points = np.r_[np.zeros((1, points.shape[1]), points.dtype), points]
+    for m in (2, 3, len(points) // 2, len(points)):
+        expected = np.sort(((points[1:m] - points[0]).astype(float) ** 2).sum(axis=1))
+        np.testing.assert_array_equal([measure._kth_smallest(points, m, k, gather) for k in range(m - 1)], expected)
+
+
+def test_anisotropy_equals_the_median_of_a_sorted_array():
+    # The streaming anisotropy against the array version it replaced: squared distances in an array,
+    # np.median, the outer half's quartic ratio averaged (in order), for lattice and off-lattice clusters.
+    def sorted_version(points, m):
+        u2 = (points[1:m].astype(float) - points[0].astype(float)) ** 2
+        r2, quartic = u2.sum(axis=1), (u2 * u2).sum(axis=1)
+        outer = r2 >= np.median(r2)
+        ratio = quartic[outer] / r2[outer] ** 2
+        c = 3 / (points.shape[1] + 2)
+        return (ratio.mean() - c) / (1 - c)
+
+    for model, dim in (("lattice", 2), ("offlattice", 2), ("lattice", 3), ("offlattice", 3)):
+        points = dlasweep.grow(3000, 4, model=model, dim=dim).points
+        counts = [2, 3, 10, 1001, 3000]
+        np.testing.assert_allclose(measure.anisotropy(points, counts), [sorted_version(points, m) for m in counts],
+                                   rtol=1e-12, atol=1e-14)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -149,6 +149,24 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
     assert not any("points" in k for k in parts._kept.values()) and (kept != 3 or parts._kept_bytes["clusters"] == 0)
 
 
+def test_a_part_of_one_cluster_keeps_its_positions_without_a_copy(tmp_path):
+    # A 1e8 cluster's positions are 800 MB and more: the part written for it (and kept for the file) holds
+    # the task's own arrays, not concatenated copies; a part of several clusters holds each in turn.
+    spec = parse_spec(TINY_SPEC)
+    tasks = list(spec.tasks())
+    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
+    results = worker.measure_tasks(tasks[:2], counts, scales, 1, [True, True])
+    parts = Parts(tmp_path)
+    parts.write({tasks[0].key: results[0]})
+    kept = next(iter(parts._kept.values()))
+    for name in Parts.PER_PARTICLE:
+        assert np.shares_memory(kept[name], results[0][name]), name
+    parts.write({t.key: r for t, r in zip(tasks[:2], results)})
+    both = list(parts._kept.values())[1]
+    np.testing.assert_array_equal(both["points"], np.concatenate([r["points"].ravel() for r in results]))
+    assert not np.shares_memory(both["points"], results[0]["points"])
+
+
 def test_parts_table_stacks_what_results_gives(tmp_path):
     # The whole-part route of _assemble equals the result-by-result one: keys in any order, across parts,
     # a failed result (its message longer than the first part's) replaced by a finished one in a later part.
