@@ -83,18 +83,25 @@ def _prefix_radii(points, lengths, rg, radius):
     for k in range(n):
         if at == len(order):
             break
-        r2 = 0.0
         for a in range(dim):
             x = float(points[k, a])
             delta = x - mean[a]
             mean[a] += delta / (k + 1)
             spread += delta * (x - mean[a])
-            r2 += (x - float(points[0, a])) ** 2
-        farthest = max(farthest, np.sqrt(r2))
+        farthest = max(farthest, seed_distance(points, k))
         while at < len(order) and lengths[order[at]] == k + 1:
             rg[order[at]] = np.sqrt(spread / (k + 1))
             radius[order[at]] = farthest
             at += 1
+
+
+@jit
+def seed_distance(points, i):
+    """The distance of point i from the first (the seed), in float64 whatever the points' type."""
+    r2 = 0.0
+    for a in range(points.shape[1]):
+        r2 += (float(points[i, a]) - float(points[0, a])) ** 2
+    return np.sqrt(r2)
 
 
 def radius_of_gyration(points) -> np.ndarray:

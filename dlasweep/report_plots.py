@@ -30,7 +30,7 @@ def _gallery(sweep, path):
         status = sweep.status_of(config, last, 0)
         ax.set_title(f"{sweep.label(config)}\nN={len(points)}, {status}", fontsize=8)
         if len(points):
-            draw_points(ax, points.astype(float), sweep.lattice, 3.0)
+            draw_points(ax, points, sweep.lattice, 3.0)
         else:
             ax.set_axis_off()
     # Two short lines: a one-panel gallery is only 3.4 inches wide.

@@ -187,3 +187,26 @@ def test_a_sweep_of_few_seeds_gives_d_and_says_why_it_has_no_interval():
     assert "2 clusters reached N, fewer than the 3 a 95% CI needs" in str(s["D_ci_reason"].values)
     for name in ("rg", "rg_over_rmax", "D_box", "anisotropy"):
         assert np.isnan(s[f"{name}_ci_lo"]) and np.isnan(s[f"{name}_ci_hi"])
+
+
+@pytest.mark.parametrize("sites", [True, False])
+def test_time_depth_pairs_equal_np_unique_of_every_particles_key(sites):
+    # The diffusion-time table of one cluster without a key per particle: a table of counts for the
+    # times its size bounds, the rarer longer ones (here a tenth, up to 1e6 steps) counted apart. Against
+    # the array computation it replaced: keys time * bins + depth bin, np.unique.
+    from dlasweep.analysis import DEPTH_EDGES, _time_depth_pairs
+
+    rng = np.random.default_rng(11)
+    n = 5000
+    points = rng.integers(-300, 300, (n, 2)).astype(np.int32) if sites else rng.normal(scale=80, size=(n, 3))
+    times = rng.integers(0, 50, n).astype(np.uint32)
+    late = rng.random(n) < 0.1
+    times[late] = rng.integers(30_000, 1_000_000, late.sum())
+    bins = len(DEPTH_EDGES) - 1
+    distance = np.sqrt(((points.astype(float) - points[0]) ** 2).sum(axis=1))
+    slot = np.clip(np.digitize(distance[1:] / max(distance.max(), 1.0), DEPTH_EDGES) - 1, 0, bins - 1)
+    expected = np.unique(times[1:].astype(np.int64) * bins + slot, return_counts=True)
+    got = _time_depth_pairs(points, times)
+    for a, b in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert (got[0] >= 20_000 * bins).any()  # the tail was taken
