@@ -22,7 +22,7 @@ import numpy as np
 from ..._jit import cached, clock, jit
 from .. import maps
 from .. import model as codes
-from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
+from ..model import GRID_GROWTH, STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
 from ..walk import (
     below,
     direction,
@@ -49,7 +49,7 @@ from .words import (
 
 JUMP_MARGIN = 2.0  # sites kept between a circle jump and the nearest particle
 CIRCLE_MIN = 16.0  # smallest circle jump: below it the exact square jumps do the work
-GROWTH = 1.25  # the grid's side grows by this factor when the cluster outgrows it
+GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into _attach
 
 
 @jit

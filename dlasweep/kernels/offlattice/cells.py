@@ -19,6 +19,7 @@ import numpy as np
 
 from ..._jit import inline, jit
 from .. import maps
+from ..model import GRID_GROWTH
 
 LINE_PAD = 32
 """Periodic images are marked in the maps up to this distance (line seed)."""
@@ -32,8 +33,8 @@ CELL_SIDE = 4
 heads: memory added by growth, 2D 1e7 37.8 -> 29.3 B/particle, 3D 3e5 53.4 -> 44.8, against a side
 of 2, with the same particles gathered (the same clusters) in the same time (2D 1e6, A/B: 10.53 s
 against 10.61)."""
-GROW = 1.3
-"""Growth factor of the grids when the cluster outgrows them."""
+GROW = GRID_GROWTH["offlattice"]
+"""The grids' growth (``model.GRID_GROWTH``), a module constant that numba freezes into the kernels."""
 HEADS_RESERVE = 2.0
 """The cell list's heads are reserved for this many times the tiles the cluster would hold after
 growing by ``GROW``: its pages cost memory only once a tile is used (``maps.zeroed``), and a
