@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -141,6 +142,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     # grids near the walker outgrow the processor's caches.
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
          f"{'peak MB':>9}{'added MB':>10}")
+    ends = {}
     for name, method, params, n in plan:
         r = probe(params, n)
         r.update(model=name, method=method, n=n)
@@ -150,7 +152,13 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
             f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
             f"{r['added_mb']:>10.0f}"
         )
+        if n == HUGE_COUNT:
+            with tempfile.TemporaryDirectory() as scratch:
+                ends[name] = end_to_end(params, n, r["peak_mb"], scratch)
+            echo(_end_to_end_line(name, n, ends[name]))
     ds = _to_dataset(rows)
+    for name, figures in ends.items():
+        ds.attrs.update({f"end_to_end_{name.replace('-', '_')}_{key}": value for key, value in figures.items()})
     for name in MODELS:
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
         if exact.sizes["run"] >= 2:
@@ -167,6 +175,14 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         for line in target_table(ds):
             echo(line)
     return ds
+
+
+def _end_to_end_line(name, n, figures) -> str:
+    """One line: the sweep's and the report's peaks beside the growth's, each against ``END_TO_END_TARGET``."""
+    return (f"{name} {_power(n)} end to end: one-cluster sweep peak {figures['sweep_peak_mb']:.0f} MB, "
+            f"{figures['sweep_ratio']:.2f}x the growth's{_verdict(figures['sweep_ratio'], END_TO_END_TARGET)}; "
+            f"its report {figures['report_peak_mb']:.0f} MB, "
+            f"{figures['report_ratio']:.2f}x{_verdict(figures['report_ratio'], END_TO_END_TARGET)}")
 
 
 def _verdict(value, target):
@@ -239,6 +255,50 @@ def _to_dataset(rows) -> xr.Dataset:
                     attrs={"title": "dlasweep kernel benchmark",
                            "history": store.provenance("dlasweep.bench.run_bench")})
     return store.describe(ds, BENCH_SCHEMA)
+
+
+END_TO_END_TARGET = 1.3
+"""A one-cluster sweep writing its file, and its report, may peak at most this many times the growth's own
+(``probe``'s peak) at ``HUGE_COUNT``."""
+
+_PEAK_OF = """
+import resource, subprocess, sys
+done = subprocess.run(sys.argv[1:], capture_output=True, text=True)
+if done.returncode:
+    sys.exit(done.stderr)
+print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
+"""
+"""Runs a command and prints its peak resident memory (MiB): its largest process's, the sweep's own (one
+cluster grows in the sweep's process), in a fresh parent so that no earlier child's counts."""
+
+
+def _peak_of(argv) -> float:
+    """The peak resident memory (MiB) of running ``argv`` (``_PEAK_OF``)."""
+    done = subprocess.run([sys.executable, "-c", _PEAK_OF, *map(str, argv)], capture_output=True, text=True,
+                          check=True)
+    return float(done.stdout.strip().splitlines()[-1])
+
+
+def end_to_end(params: dict, n: int, grown_peak: float, folder) -> dict:
+    """A one-cluster sweep of ``n`` (``params``) and its report, as a user runs them, against the growth.
+
+    Each runs as ``dlasweep sweep`` and ``dlasweep report`` in a fresh process, into ``folder``.
+
+    Returns
+    -------
+    dict
+        ``sweep_peak_mb`` and ``report_peak_mb``, and each over ``grown_peak`` (the growth's own peak,
+        MiB, from ``probe``): ``sweep_ratio``, ``report_ratio``.
+    """
+    folder = Path(folder)
+    spec = folder / f"end_to_end_{n}.toml"
+    model = "".join(f"{key} = {json.dumps(value)}\n" for key, value in params.items())
+    spec.write_text(f'name = "end-to-end"\n[grid]\nn_particles = [{n}]\nseeds = 1\n[model]\n{model}')
+    out = folder / f"end_to_end_{n}.nc"
+    sweep = _peak_of([sys.executable, "-m", "dlasweep", "sweep", spec, "-o", out])
+    report = _peak_of([sys.executable, "-m", "dlasweep", "report", out, "-o", folder / f"end_to_end_{n}"])
+    return {"sweep_peak_mb": sweep, "report_peak_mb": report, "sweep_ratio": sweep / grown_peak,
+            "report_ratio": report / grown_peak}
 
 
 REPORT_SPEC = """\

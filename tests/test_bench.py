@@ -73,3 +73,20 @@ def test_sweep_ratios_set_the_whole_process_against_its_kernels():
     assert get["process"] > get["ideal"] and get["ratio"] == get["process"] / get["ideal"]
     assert get["target"] == RATIO_TARGET[0] * get["ideal"] + RATIO_TARGET[1]
     assert len(lines) == 2 and lines[1].split()[:3] == ["6", "x", "[50,"]
+
+
+def test_end_to_end_sets_a_sweep_and_its_report_against_the_growth(tmp_path):
+    # A one-cluster sweep and its report as a user runs them, their peaks over the growth's own: the
+    # processes hold the imports (and the report matplotlib), so at 2000 particles both exceed it.
+    from dlasweep.bench import _end_to_end_line, end_to_end, probe
+
+    params = {"model": "lattice", "dim": 2}
+    grown = probe(params, 2000)
+    figures = end_to_end(params, 2000, grown["peak_mb"], tmp_path)
+    assert figures["sweep_ratio"] == figures["sweep_peak_mb"] / grown["peak_mb"] > 1.0
+    assert figures["report_ratio"] == figures["report_peak_mb"] / grown["peak_mb"] > 1.0
+    assert (tmp_path / "end_to_end_2000.nc").is_file() and (tmp_path / "end_to_end_2000" / "report.md").is_file()
+    assert _end_to_end_line("lattice-2d", 10**8, {"sweep_peak_mb": 2600.0, "report_peak_mb": 3400.0,
+                                                  "sweep_ratio": 1.04, "report_ratio": 1.36}) == (
+        "lattice-2d 1e8 end to end: one-cluster sweep peak 2600 MB, 1.04x the growth's (<= 1.3: met); "
+        "its report 3400 MB, 1.36x (<= 1.3: 5% over)")
