@@ -27,13 +27,12 @@ import numpy as np
 import xarray as xr
 
 from . import branching
-from ._jit import jit
 from .config import LEVEL, MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
 from .exact import against_exact
 from .extrapolation import extrapolate
 from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts,
                   history_counts, mass_radius_counts, seed_interval)
-from .measure import radius_of_gyration, seed_distance
+from .measure import radius_of_gyration, time_depth_pairs
 from .params import STATUSES
 from .ragged import cluster_points
 from .schema import config_dims, plain
@@ -219,7 +218,7 @@ class _Sweep:
                 continue
             times = self.times(config, seed)
             top = max(top, int(times.max()))
-            pending.setdefault(config, []).append(_time_depth_pairs(cluster_points(self.ds, i), times))
+            pending.setdefault(config, []).append(time_depth_pairs(cluster_points(self.ds, i), times, DEPTH_EDGES))
             if sum(len(keys) for keys, _ in pending[config]) > _MERGE_AT:
                 pending[config] = [_merge(pending[config])]
         tables = {}
@@ -287,45 +286,6 @@ class _Sweep:
             "headline": "D: ensemble mass-radius (n ~ <Rg>**D), window chosen from the data (D_range_lo..hi)",
             "bootstrap_resamples": resamples,
         })
-
-
-def _time_depth_pairs(points, times):
-    """The distinct keys ``time * bins + depth bin`` of particles 1.. of one cluster, sorted, and their counts:
-    ``np.unique``'s answer without an array of keys (a 1e8 cluster's would take 800 MB, and its sort as much
-    again). The depth is the distance from the seed over the largest, at least 1 (``DEPTH_EDGES``)."""
-    bins = len(DEPTH_EDGES) - 1
-    # a count per (time, bin) up to a time the cluster's size bounds; the rare longer times one by one
-    dense = min(int(times.max()) + 1, max(1024, 4 * len(times)))
-    table, tail = _time_depth_counts(points, times, DEPTH_EDGES, dense)
-    keys = np.flatnonzero(table)
-    tail_keys, tail_counts = np.unique(tail, return_counts=True)
-    return np.r_[keys, tail_keys], np.r_[table.ravel()[keys], tail_counts]
-
-
-@jit
-def _time_depth_counts(points, times, edges, dense):
-    """``_time_depth_pairs``' counts: of (time, bin) in a table for times below ``dense``, and the keys of
-    the others. Distances in float64 as numpy takes them; the bin as ``np.digitize`` gives it, clipped."""
-    n, dim = points.shape
-    bins = len(edges) - 1
-    far = 1.0
-    for i in range(n):
-        far = max(far, seed_distance(points, i))
-    table = np.zeros((dense, bins), np.int64)
-    late = 0
-    for i in range(1, n):
-        late += times[i] >= dense
-    tail = np.empty(late, np.int64)
-    late = 0
-    for i in range(1, n):
-        slot = min(max(np.searchsorted(edges, seed_distance(points, i) / far, side="right") - 1, 0), bins - 1)
-        t = np.int64(times[i])
-        if t < dense:
-            table[t, slot] += 1
-        else:
-            tail[late] = t * bins + slot
-            late += 1
-    return table, tail
 
 
 def _merge(tables):

@@ -194,7 +194,8 @@ def test_time_depth_pairs_equal_np_unique_of_every_particles_key(sites):
     # The diffusion-time table of one cluster without a key per particle: a table of counts for the
     # times its size bounds, the rarer longer ones (here a tenth, up to 1e6 steps) counted apart. Against
     # the array computation it replaced: keys time * bins + depth bin, np.unique.
-    from dlasweep.analysis import DEPTH_EDGES, _time_depth_pairs
+    from dlasweep.analysis import DEPTH_EDGES
+    from dlasweep.measure import time_depth_pairs
 
     rng = np.random.default_rng(11)
     n = 5000
@@ -206,7 +207,7 @@ def test_time_depth_pairs_equal_np_unique_of_every_particles_key(sites):
     distance = np.sqrt(((points.astype(float) - points[0]) ** 2).sum(axis=1))
     slot = np.clip(np.digitize(distance[1:] / max(distance.max(), 1.0), DEPTH_EDGES) - 1, 0, bins - 1)
     expected = np.unique(times[1:].astype(np.int64) * bins + slot, return_counts=True)
-    got = _time_depth_pairs(points, times)
+    got = time_depth_pairs(points, times, DEPTH_EDGES)
     for a, b in zip(got, expected, strict=True):
         np.testing.assert_array_equal(a, b)
     assert (got[0] >= 20_000 * bins).any()  # the tail was taken
