@@ -56,6 +56,10 @@ _BITMAP_CAP = 1 << 31
 """Most bits (256 MiB) a stack of bitmaps (a side's grids, or its strips) may take; a grid larger than this
 alone is counted in bands of its rows."""
 
+_PIECE_MOST = 1 << 24
+"""Most particles (16 Mi: 128 to 384 MiB) of a prefix's shifted, first-axis ordered copy that the marking
+takes at a time (``_pieces``); a larger prefix is marked in pieces, each copied anew from the prefix."""
+
 _BANDS_MOST = 64
 """Most bands a grid is counted in (a pass over the particles each); a grid that needs more belongs to a
 sparse set, whose boxes are sorted instead."""
@@ -100,27 +104,68 @@ def _ordered(points, high):
 
 
 @jit
-def _shifted(points, low, ordered, top):
-    """``points - low``, a new array; when ``ordered``, sorted by the integer part of the first coordinate
-    (a stable counting sort up to ``top``). One copy of a prefix, not two: at 1e7 particles and more
-    the measurement must stay within the memory the growth needed."""
-    out = np.empty_like(points)
+def _pieces(prefix, low, top, ordered, most):
+    """How ``_count_prefix`` hands a prefix, shifted by ``low``, to the marking: in pieces of at most
+    ``most`` particles (more only where one integer first coordinate holds more).
+
+    In first-axis order (``ordered``) a piece is the particles of a range of
+    integer first coordinates, sorted by it (a stable counting sort up to
+    ``top``), and ``_piece`` fills it anew for each marking; otherwise one
+    piece, the whole prefix. One piece is filled here, once. A copy of a
+    1e8 cluster would outweigh what its growth left free.
+
+    Returns
+    -------
+    cuts : int64 (K + 1,), the pieces' first coordinates (ordered) or [0, 1]
+    start : int64, where each first coordinate's particles start in order (empty when not ordered)
+    buffer : the one piece, or room for the largest
+    """
+    n, dim = prefix.shape
     if not ordered:
-        for i in range(len(points)):
-            for a in range(points.shape[1]):
-                out[i, a] = points[i, a] - low[a]
-        return out
+        buffer = np.empty_like(prefix)
+        for i in range(n):
+            for a in range(dim):
+                buffer[i, a] = prefix[i, a] - low[a]
+        return np.array([0, 1], np.int64), np.empty(0, np.int64), buffer
     start = np.zeros(top + 2, np.int64)
-    for i in range(len(points)):
-        start[np.int64(np.floor(points[i, 0] - low[0])) + 1] += 1
+    for i in range(n):
+        start[np.int64(np.floor(prefix[i, 0] - low[0])) + 1] += 1
     for c in range(1, top + 2):
         start[c] += start[c - 1]
-    for i in range(len(points)):
-        c = np.int64(np.floor(points[i, 0] - low[0]))
-        for a in range(points.shape[1]):
-            out[start[c], a] = points[i, a] - low[a]
-        start[c] += 1
-    return out
+    cuts = [0]
+    largest = 0
+    for x in range(1, top + 1):
+        if start[x] > start[cuts[-1]] and start[x + 1] - start[cuts[-1]] > most:
+            largest = max(largest, start[x] - start[cuts[-1]])
+            cuts.append(x)
+    largest = max(largest, n - start[cuts[-1]])
+    cuts.append(top + 1)
+    buffer = np.empty((largest, dim), prefix.dtype)
+    if len(cuts) == 2:
+        _fill_piece(prefix, low, start, 0, top + 1, buffer)
+    return np.array(cuts, np.int64), start, buffer
+
+
+@jit
+def _piece(prefix, low, start, cuts, c, buffer):
+    """Piece ``c`` of ``_pieces``: the one piece it filled, or piece c filled into ``buffer``."""
+    if len(cuts) == 2:
+        return buffer
+    return _fill_piece(prefix, low, start, cuts[c], cuts[c + 1], buffer)
+
+
+@jit
+def _fill_piece(prefix, low, start, x0, x1, buffer):
+    """The particles of ``prefix`` whose integer first coordinate (shifted by ``low``) is in [x0, x1),
+    shifted, in first-axis order (stable), into the start of ``buffer``; that part."""
+    at = start[x0:x1 + 1] - start[x0]
+    for i in range(len(prefix)):
+        x = np.int64(np.floor(prefix[i, 0] - low[0]))
+        if x0 <= x < x1:
+            for a in range(prefix.shape[1]):
+                buffer[at[x - x0], a] = prefix[i, a] - low[a]
+            at[x - x0] += 1
+    return buffer[:start[x1] - start[x0]]
 
 
 @inline
@@ -493,8 +538,8 @@ class PrefixBoxes:
             p = p - low
             if extent < 2**31:
                 p = p.astype(np.int32)  # half the memory traffic
-        self.args = (p, ends, integer, self.radius, *self.plan, _BITMAP_CAP, _STRIP_WORDS_PER_SITE, self.counts,
-                     self.routes)
+        self.args = (p, ends, integer, self.radius, *self.plan, _BITMAP_CAP, _STRIP_WORDS_PER_SITE, _PIECE_MOST,
+                     self.counts, self.routes)
 
     def count(self):
         """Fill in ``counts``: in compiled code, then ``finish``."""
@@ -589,7 +634,7 @@ def _grids_within(cap, shape):
 
 
 @jit
-def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words,
+def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, piece,
                    counts, routes):
     """``counts[c]``: the counts of ``points[:ends[c]]``, and ``routes[c]`` how each side was counted.
 
@@ -598,11 +643,11 @@ def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, pare
     """
     for c in range(len(ends)):
         _count_prefix(points[: ends[c]], integer, radius, sides, own, n_own, order, parent, part, shift, cap,
-                      strip_words, counts[c], routes[c])
+                      strip_words, piece, counts[c], routes[c])
 
 
 @jit
-def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, out,
+def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, piece, out,
                   route):
     """``_prefix_counts`` for one prefix: the traversal of ``box_counts``' docstring, a route per side (``ROUTES``)."""
     n, dim = prefix.shape
@@ -615,7 +660,7 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
         for a in range(dim):
             high[a] = max(high[a], prefix[i, a] - low[a])
     extent = float(high.max()) + 2 * _HALF
-    points = _shifted(prefix, low, _ordered(prefix, high), np.int64(high[0]))
+    cuts, start, buffer = _pieces(prefix, low, np.int64(high[0]), _ordered(prefix, high), piece)
     pad = 3 - dim
     kids = np.zeros(len(sides), np.int64)  # of each side, those below the extent
     for k in range(len(sides)):
@@ -661,10 +706,12 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                     and (side == 1 or _words(cells) < strip_words * n)):
                 route[k] = STRIPS
                 strips = np.zeros((len(offsets), cells[0] * cells[1], (cells[2] + 63) // 64), np.uint64)
-                if dim == 2:
-                    _mark_sites(points, offsets, float(side), (cells[1],), strips)
-                else:
-                    _mark_sites(points, offsets, float(side), (cells[0], cells[1]), strips)
+                for c in range(len(cuts) - 1):
+                    points = _piece(prefix, low, start, cuts, c, buffer)
+                    if dim == 2:
+                        _mark_sites(points, offsets, float(side), (cells[1],), strips)
+                    else:
+                        _mark_sites(points, offsets, float(side), (cells[0], cells[1]), strips)
                 if side == 1:
                     count, stack = _least_count(strips), strips
                 else:
@@ -688,8 +735,9 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                         total = 0
                         for row0 in range(0, rows, band):
                             bits[:] = 0
-                            _mark_boxes(points, offsets, float(side), radius, (shape[0], shape[1], shape[2]), g, bits,
-                                        np.empty((0, 0), np.int64), row0)
+                            for c in range(len(cuts) - 1):
+                                _mark_boxes(_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
+                                            (shape[0], shape[1], shape[2]), g, bits, np.empty((0, 0), np.int64), row0)
                             total += _least_count(bits)
                         count = total if count < 0 else min(count, total)
             else:
@@ -697,8 +745,9 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                 for first in range(0, grids, per_pass):
                     stack = np.zeros((min(per_pass, grids - first), shape[0] * shape[1], (shape[2] + 63) // 64),
                                      np.uint64)
-                    _mark_boxes(points, offsets, float(side), radius, (shape[0], shape[1], shape[2]), first, stack,
-                                np.empty((0, 0), np.int64))
+                    for c in range(len(cuts) - 1):
+                        _mark_boxes(_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
+                                    (shape[0], shape[1], shape[2]), first, stack, np.empty((0, 0), np.int64))
                     least = _least_count(stack)
                     count = least if count < 0 else min(count, least)
                 if per_pass < grids:

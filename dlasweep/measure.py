@@ -55,7 +55,7 @@ def cluster_measures(points, ends, history, lattice: bool = True, scales=None, o
 
 @jit
 def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, points, box_ends, integer, box_radius,
-                      sides, own, n_own, order, parent, part, shift, cap, strip_words, counts, routes):
+                      sides, own, n_own, order, parent, part, shift, cap, strip_words, piece, counts, routes):
     """``cluster_measures``' figures, into the arrays given (the box counts as ``_prefix_counts`` leaves them)."""
     past = history > len(positions)
     _prefix_radii(positions, ends, rg, radius)
@@ -65,7 +65,7 @@ def _cluster_measures(positions, ends, history, rg, rg_history, radius, shape, p
             rg_history[c] = np.nan
     shape[:] = _anisotropy(positions, ends, MEDIAN_GATHER)
     _prefix_counts(points, box_ends, integer, box_radius, sides, own, n_own, order, parent, part, shift, cap,
-                   strip_words, counts, routes)
+                   strip_words, piece, counts, routes)
 
 
 @jit

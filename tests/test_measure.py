@@ -72,6 +72,38 @@ def test_box_counts_do_not_depend_on_the_bitmap_cap(monkeypatch, dim, lattice, c
     np.testing.assert_array_equal(box_counts(points, lattice=lattice), expected)
 
 
+@pytest.mark.parametrize("most", [1, 700, 1 << 24])
+def test_pieces_are_the_shifted_prefix_in_first_axis_order(most):
+    # A prefix handed to the marking in pieces of at most ``most`` particles (more only where one first
+    # coordinate holds more): together, in order, the stable first-axis sort of the shifted prefix.
+    rng = np.random.default_rng(4)
+    prefix = np.c_[rng.integers(0, 300, 5000), rng.integers(-50, 50, 5000)].astype(np.int32)
+    low = prefix.min(axis=0)
+    shifted = prefix - low
+    expected = shifted[np.argsort(shifted[:, 0], kind="stable")]
+    cuts, start, buffer = boxes._pieces(prefix, low, np.int64(shifted[:, 0].max()), True, most)
+    pieces = [boxes._piece(prefix, low, start, cuts, c, buffer).copy() for c in range(len(cuts) - 1)]
+    np.testing.assert_array_equal(np.concatenate(pieces), expected)
+    widest = np.bincount(shifted[:, 0]).max()
+    assert all(len(piece) <= max(most, widest) for piece in pieces)
+    assert (len(pieces) == 1) == (most >= len(prefix))
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+def test_box_counts_do_not_depend_on_the_pieces(monkeypatch, lattice):
+    # A set whose bitmaps outgrow the cache is marked in first-axis order; in pieces of 1000 particles
+    # (each marking fills each piece anew) it counts as in one, on every route the caps send it to.
+    rng = np.random.default_rng(9)
+    points = np.c_[rng.integers(0, 2048, 20_000), rng.integers(0, 1100, 20_000)]
+    if not lattice:
+        points = points + rng.random(points.shape)
+    expected = boxes.prefix_box_counts(points, [5000, 20_000], lattice=lattice)[1]
+    monkeypatch.setattr(boxes, "_PIECE_MOST", 1000)
+    for cap in (1 << 31, 1 << 16, 1 << 12):
+        monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
+        np.testing.assert_array_equal(boxes.prefix_box_counts(points, [5000, 20_000], lattice=lattice)[1], expected)
+
+
 ROUTES = {
     # How the sides counted from the particles are counted: the settings that force it, and its code.
     "strips of sites": ({}, boxes.STRIPS),
