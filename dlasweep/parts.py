@@ -156,12 +156,9 @@ class Parts:
         each part read are let go (a later read takes them from its file).
         """
         for file, run in itertools.groupby(keys, lambda key: self.where[key][0]):
-            if release and self.PER_PARTICLE[0] in self._kept.get(file, {}):
-                clusters = {name: self._kept[file].pop(name) for name in self.PER_PARTICLE}
-                self._kept_bytes["clusters"] -= sum(values.nbytes for values in clusters.values())
-                kept = {**self._kept[file], **clusters}  # for this read
-            else:
-                kept = self._kept.get(file, {})
+            kept = self._kept.get(file, {})
+            if release:
+                kept = {**kept, **self._release(file)}  # for this read
             with self._members(file, kept, names) as z:
                 part = [{} for _ in z["keys"]]
                 for name in names:
@@ -175,6 +172,20 @@ class Parts:
                     for result, shape, start, end in zip(part, shapes.tolist(), (ends - sizes).tolist(), ends.tolist()):
                         result[name] = flat[start:end].reshape(shape)
             yield from (part[self.where[key][1]] for key in run)
+
+    def release(self, keys):
+        """Let go of the positions kept in memory of the parts that hold ``keys`` (later reads take them from
+        the files)."""
+        for file in {self.where[key][0] for key in keys}:
+            self._release(file)
+
+    def _release(self, file) -> dict:
+        """The positions kept of one part, no longer kept (none: empty)."""
+        if self.PER_PARTICLE[0] not in self._kept.get(file, {}):
+            return {}
+        clusters = {name: self._kept[file].pop(name) for name in self.PER_PARTICLE}
+        self._kept_bytes["clusters"] -= sum(values.nbytes for values in clusters.values())
+        return clusters
 
     def table(self, keys, names) -> dict:
         """Variables ``names`` of the results of ``keys``, each stacked on a first axis in key order.

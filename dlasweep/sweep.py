@@ -414,9 +414,10 @@ def _compute(client, spec, todo, parts, bar, stream=None):
             error = results[1] if future.status == "error" else None
             message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
             results = [error_result(counts, len(scales), task.params["dim"], message) for task in batch]
-        parts.write({task.key: result for task, result in zip(batch, results)})
+        finished = {task.key: result for task, result in zip(batch, results)}
+        parts.write(finished)
         if stream is not None:
-            stream.feed(task.key for task in batch)
+            stream.feed(finished)
         future.release()
         bar.update(len(batch))
         for batch in itertools.islice(pending, 1):
@@ -459,17 +460,22 @@ class _Stream:
         columns = schema.ragged_columns([t.params["model"] for t in tasks], [t.params["dim"] for t in tasks])
         self.writer = store.ParticleWriter(parts.path / PARTICLES, columns)
 
-    def feed(self, done=()):
-        """Write the clusters that come next in order and are no longer pending (``todo`` but not ``done``).
+    def feed(self, done=None):
+        """Write the clusters that come next in order and are no longer pending (``todo`` but not in ``done``,
+        results by task key, just written to the parts: those are written from memory, not read back).
 
         A cluster that failed in this run is written too (it has no points); one
         that failed in an earlier run is pending until it is computed again.
         """
+        done = done or {}
         self.pending.difference_update(done)
         ready = list(itertools.takewhile(lambda key: key not in self.pending,
                                          itertools.islice(self.keys, self.next, None)))
-        for result in self.parts.results(ready, Parts.PER_PARTICLE, release=True):
+        read = self.parts.results([key for key in ready if key not in done], Parts.PER_PARTICLE, release=True)
+        for key in ready:
+            result = done[key] if key in done else next(read)
             self.writer.add(*(result[name] for name in Parts.PER_PARTICLE))
+        self.parts.release([key for key in ready if key in done])
         self.next += len(ready)
 
 

@@ -74,7 +74,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
             "n_grown": prefix.astype(np.int64),
             "status": np.where(reached, Status.ok, Status[cluster.status]).astype(np.int8),
             "wall_time": np.where(np.isnan(cluster.times), cluster.seconds, cluster.times),
-            "walk_steps": np.cumsum(cluster.steps, dtype=np.int64)[prefix - 1],
+            "walk_steps": _prefix_sums(cluster.steps, prefix),
             "points": points if stored else points[:0],
             "diffusion_time": cluster.steps if stored else cluster.steps[:0],
             "parent": np.asarray(cluster.parents if stored else cluster.parents[:0], np.int32),
@@ -82,6 +82,13 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
         }
     except Exception as err:
         return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
+
+
+def _prefix_sums(steps, prefix) -> np.ndarray:
+    """The sums of ``steps[:m]`` for each m of ``prefix`` (ascending), in int64: a sum per stretch, not a
+    cumulative sum of every particle (800 MB at 1e8)."""
+    stretches = [steps[a:b].sum(dtype=np.int64) for a, b in zip(np.r_[0, prefix[:-1]], prefix)]
+    return np.cumsum(np.array(stretches, np.int64))
 
 
 def _stream(root_seed, task) -> np.random.SeedSequence:

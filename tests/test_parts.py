@@ -187,3 +187,44 @@ def test_parts_table_stacks_what_results_gives(tmp_path):
             for name in names:
                 np.testing.assert_array_equal(table[name][i], result[name])
         assert [str(e) for e in table["error"]].count(str(failed["error"])) == 1
+
+
+def test_the_stream_writes_a_finished_cluster_from_memory_and_a_later_one_from_its_part(tmp_path, monkeypatch):
+    # A cluster finished in order is written to the file from the results in hand, not read back from its
+    # part (a 1e8 cluster, too large to keep, was read back beside its own 1.6 GB); one that finished
+    # before an earlier cluster is read from its part once that earlier one is in.
+    from dlasweep.sweep import _Stream
+
+    spec = parse_spec(TINY_SPEC)
+    tasks = [t for t in spec.tasks() if spec.stores(t)][:3]
+    counts, scales = np.asarray(spec.counts), worker.sweep_scales(spec)
+    results = dict(zip((t.key for t in tasks), worker.measure_tasks(tasks, counts, scales, 1, [True] * 3)))
+    monkeypatch.setattr(Parts, "KEEP_BYTES", 0)  # nothing kept: a read is a read of the file
+    read = []
+    results_of = Parts.results
+
+    def spy(self, keys, names, release=False):
+        keys = list(keys)
+        read.extend(keys)
+        return results_of(self, keys, names, release)
+
+    monkeypatch.setattr(Parts, "results", spy)
+    parts = Parts(tmp_path)
+    stream = _Stream(spec, parts, list(spec.tasks()))
+    first, second, third = (t.key for t in tasks)
+    for keys, expected_reads in (([first], []), ([third], []), ([second], [third])):
+        finished = {key: results[key] for key in keys}
+        parts.write(finished)
+        stream.feed(finished)
+        assert read == expected_reads
+        read.clear()
+    assert stream.next == 3
+    assert stream.writer.written + stream.writer._filled == sum(len(r["points"]) for r in results.values())
+
+
+def test_walk_steps_at_each_count_are_the_cumulative_sums():
+    from dlasweep.task import _prefix_sums
+
+    steps = np.random.default_rng(2).integers(0, 2**32 - 1, 1000, dtype=np.uint64).astype(np.uint32)
+    prefix = np.array([1, 1, 7, 500, 1000])
+    np.testing.assert_array_equal(_prefix_sums(steps, prefix), np.cumsum(steps, dtype=np.int64)[prefix - 1])
