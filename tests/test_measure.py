@@ -98,7 +98,7 @@ def test_box_counts_do_not_depend_on_the_pieces(monkeypatch, lattice):
     if not lattice:
         points = points + rng.random(points.shape)
     expected = boxes.prefix_box_counts(points, [5000, 20_000], lattice=lattice)[1]
-    monkeypatch.setattr(boxes, "_PIECE_MOST", 1000)
+    monkeypatch.setattr(boxes, "_PIECE_BYTES", 1000 * points[:1].nbytes)
     for cap in (1 << 31, 1 << 16, 1 << 12):
         monkeypatch.setattr(boxes, "_BITMAP_CAP", cap)
         np.testing.assert_array_equal(boxes.prefix_box_counts(points, [5000, 20_000], lattice=lattice)[1], expected)
