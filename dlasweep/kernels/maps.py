@@ -230,18 +230,27 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
 
     A field stores ``cap - distance``: zero is the cap, so a page that no
     particle came within reach of is never written and takes no memory.
+    Each row is taken a tile's stretch at a time, whose cells lie side by
+    side, by a branch-free maximum the compiler vectorises (2D 1e6
+    off-lattice: the marking at attachment 0.78 -> 0.57 s, against a
+    compare and store per cell, or rings about the cell that stop where
+    nothing drops).
     """
     reach -= 1
+    last = (1 << FIELD_TILE[dim]) - 1
     klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
+    alo, ahi = max(ci - reach, 0), min(ci + reach, fw - 1)
     for c in range(klo, khi + 1):
         dk = abs(c - ck)
         for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
             dj = max(dk, abs(b - cj))
-            for a in range(max(ci - reach, 0), min(ci + reach, fw - 1) + 1):
-                here = field_cell(dim, fw, a, b, c)
-                near = np.uint8(cap - max(dj, abs(a - ci)))
-                if field[here] < near:
-                    field[here] = near
+            a = alo
+            while a <= ahi:
+                end = min(ahi, a | last)
+                base = field_cell(dim, fw, a, b, c) - a
+                for x in range(a, end + 1):
+                    field[base + x] = max(field[base + x], np.uint8(cap - max(dj, abs(x - ci))))
+                a = end + 1
 
 
 @jit
@@ -286,13 +295,20 @@ times wider than the level below; level 0 is the field (cells of
 
 
 @jit
-def pyramid_starts(dim, width, cap, most=64):
-    """Where each level of the pyramid of a grid of side ``width`` starts in
-    its array (and the end): enough levels that the top one's capped distance
-    spans the grid, at most ``most``."""
+def pyramid_levels(dim, width, cap, most=64):
+    """Levels of the pyramid of a grid of side ``width``: enough that the top
+    one's capped distance spans the grid, at most ``most``."""
     levels = 1
     while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width and levels < most:
         levels += 1
+    return levels
+
+
+@jit
+def pyramid_starts(dim, width, cap, most=64):
+    """Where each level of the pyramid of a grid of side ``width`` starts in
+    its array (and the end)."""
+    levels = pyramid_levels(dim, width, cap, most)
     start = np.zeros(levels + 1, np.int64)
     for level in range(levels):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
@@ -315,15 +331,24 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
     """Record a particle in cell (i, j, k) on every level: lower the distances
     within ``reach`` (the cap, or 1 to mark only the particle's own cells for
     ``pyramid_fill``). A level whose cell already holds a particle has every
-    coarser one marked too."""
-    start = pyramid_starts(dim, width, cap, most)
-    for level in range(len(start) - 1):
+    coarser one marked too.
+
+    Returns the first level whose cell already held a particle (the number
+    of levels when none did). Each level's start is summed on the way (an
+    array of them, allocated at every particle, cost more than the marking).
+    """
+    levels = pyramid_levels(dim, width, cap, most)
+    base = 0
+    for level in range(levels):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         fw = (width + (1 << shift) - 1) >> shift
         ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
-        if pyramid[start[level] + field_cell(dim, fw, ci, cj, ck)] == cap:
-            break
-        field_lower(pyramid[start[level]:start[level + 1]], dim, fw, cap, reach, ci, cj, ck)
+        if pyramid[base + field_cell(dim, fw, ci, cj, ck)] == cap:
+            return level
+        size = field_size(dim, fw)
+        field_lower(pyramid[base:base + size], dim, fw, cap, reach, ci, cj, ck)
+        base += size
+    return levels
 
 
 @jit

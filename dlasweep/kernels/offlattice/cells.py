@@ -153,14 +153,13 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field, spread):
             i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[MAP_OFFSET + 1]
             i2 = int(np.floor(pts[i, 2])) + gi[MAP_OFFSET + 2] if dim == 3 else 0
             if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
-                # a coarse cell that already holds a particle has every level from
-                # 2 up (cells of side >= 2**FS) and the field marked: only level 1 is left
-                fw = (W + (1 << FS) - 1) >> FS
-                ci, cj, ck = i0 >> FS, i1 >> FS, i2 >> FS
-                fresh = field[maps.field_cell(dim, fw, ci, cj, ck)] != gi[FIELD_CAP]
-                _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, len(cells) if fresh else FS)
-                if fresh:
-                    maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[FIELD_CAP], spread, gi[PYRAMID_LEVELS])
+                # a pyramid level whose cell already held a particle has that particle's
+                # map levels from its cells' side up marked: only the finer ones are left
+                held = maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[FIELD_CAP], spread, gi[PYRAMID_LEVELS])
+                top = len(cells)
+                if held < maps.pyramid_levels(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS]):
+                    top = min(top, FS + maps.PYRAMID_STEP[dim] * held)
+                _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
 
 
 @jit
