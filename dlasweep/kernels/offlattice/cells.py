@@ -326,9 +326,9 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     ``grow._walk`` holds a copy of this body, spelled out (a call would cost
     reference counting, and numba's inlining cost as much).
 
-    It searches the map levels only where the field leaves them open: a
-    particle within two coarse cells sets every level from 3 up; at the
-    field's cap the pyramid bounds, or where the grid is periodic the map
+    It searches the map levels only where the field leaves them open: with
+    a particle in the coarse cells about w's (fd <= 1) only level 1, as
+    level FS's blocks are the field's and set; at the field's cap the pyramid bounds, or where the grid is periodic the map
     levels above ``flo`` (those up to it are clear). A test holds it to
     ``map_dist`` on random grids.
     """
@@ -356,8 +356,8 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             f = face_gap(X0, X1, X2, dim, FS)
             dm = (fd - 1) * fside + f
         lo, hi = 0, 0
-        if fd <= 1:
-            hi = min(ftop, 3)
+        if fd <= 1:  # level FS's 3**dim block is the field's: set, so level 1 alone is open
+            hi = min(ftop, FS)
         elif fd >= fcap:
             if len(pstart) > 2:
                 dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))

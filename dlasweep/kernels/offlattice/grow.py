@@ -219,8 +219,8 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                         f = face_gap(X0, X1, X2, dim, FS)
                         dm = (fd - 1) * fside + f
                     lo, hi = 0, 0
-                    if fd <= 1:
-                        hi = min(ftop, 3)
+                    if fd <= 1:  # level FS's 3**dim block is the field's: set, so level 1 alone is open
+                        hi = min(ftop, FS)
                     elif fd >= fcap:
                         if len(pstart) > 2:
                             dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
