@@ -87,7 +87,8 @@ def test_walk_bound_is_map_dist(dim, line):
     need = pts[:, -1].max() if line else np.abs(pts).max()
     gi, _, words, start, blocks, cellz, _, _, field = cells.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
-    per, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low = cells.walk_geometry(gi, cellz, dim)
+    per, m0, m1, m2, W, fw, fcap, flo, ftop, low = cells.walk_geometry(gi, cellz, dim)
+    pstart = cells.level_starts(gi, dim)
     assert per == line
     scale = rng.choice([0.5, 3.0, 15.0, 60.0, 200.0], 20000)
     q = pts[rng.integers(0, n, 20000)] + rng.normal(0, 1, (20000, dim)) * scale[:, None]

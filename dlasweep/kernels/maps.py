@@ -22,7 +22,7 @@ import sys
 import numpy as np
 from numba import types
 
-from .._jit import inline, jit
+from .._jit import borrow, inline, jit
 
 HUGE_PAGE = 2 << 20
 """Size of a transparent huge page (x86-64 and most Linux arm64)."""
@@ -366,7 +366,7 @@ def pyramid_low(dim, cap):
     return (cap - 2) // (1 << PYRAMID_STEP[dim]) + 2
 
 
-@jit
+@borrow
 def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
     """The level of the pyramid that bounds the distance from cell (i, j, k)
     best, and its value there, searched from level ``guess``.
@@ -410,7 +410,7 @@ def pyramid_bound(dim, level, value):
     return ((value - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * level)) + 1
 
 
-@jit
+@borrow
 def _level_value(pyramid, start, dim, width, cap, level, i, j, k):
     shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
     fw = (width + (1 << shift) - 1) >> shift

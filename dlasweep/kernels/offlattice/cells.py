@@ -17,7 +17,7 @@ field)`` that ``build_grid`` returns.
 
 import numpy as np
 
-from ..._jit import inline, jit
+from ..._jit import borrow, inline, jit
 from .. import maps
 from ..model import GRID_GROWTH
 
@@ -266,7 +266,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     if 1 < fd < gi[FIELD_CAP]:
         return dm
     if fd >= gi[FIELD_CAP] and gi[PYRAMID_LEVELS] > 1:
-        pstart = maps.pyramid_starts(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS])
+        pstart = level_starts(gi, dim)
         return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[FIELD_CAP], maps.pyramid_low(dim, gi[FIELD_CAP])))
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
@@ -290,9 +290,10 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 
 @jit
 def walk_geometry(gi, cells, dim):
-    """The grid's constants that ``walk_bound`` takes, worked out once per walk:
-    (periodic, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low): ``pstart`` the
-    distance pyramid's level starts, ``low`` its ``maps.pyramid_low``."""
+    """The grid's scalar constants that ``walk_bound`` takes, worked out once per walk:
+    (periodic, m0, m1, m2, W, fw, fcap, flo, ftop, low), ``low`` the distance
+    pyramid's ``maps.pyramid_low``. (Its level starts, an array, come from
+    ``maps.pyramid_starts`` once per grid: the walk allocates nothing.)"""
     ftop = min(len(cells) - 1, gi[TOP_LEVEL]) + 1
     fcap = gi[FIELD_CAP]
     # a field at its cap puts every particle (cap - 1) coarse cells away, so
@@ -302,10 +303,16 @@ def walk_geometry(gi, cells, dim):
         flo += 1
     fw = (gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
     return (gi[PERIODIC] == 1, float(gi[MAP_OFFSET]), float(gi[MAP_OFFSET + 1]), float(gi[MAP_OFFSET + 2]), float(gi[MAP_WIDTH]), fw, fcap, flo, ftop,
-            maps.pyramid_starts(dim, gi[MAP_WIDTH], fcap, gi[PYRAMID_LEVELS]), maps.pyramid_low(dim, fcap))
+            maps.pyramid_low(dim, fcap))
 
 
 @jit
+def level_starts(gi, dim):
+    """Where each level of the grid's distance pyramid starts (``maps.pyramid_starts``)."""
+    return maps.pyramid_starts(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
+
+
+@borrow
 def pyramid_dist(field, pstart, dim, W, X0, X1, X2, cap, low):
     """Lower bound on the centre distance from grid point X to every particle
     from the distance pyramid's levels above the field, 0 when none bounds

@@ -12,7 +12,7 @@ it moves by ``RAY`` with an exact ray cast (``contact``).
 
 import numpy as np
 
-from ..._jit import cached, clock, jit
+from ..._jit import borrow, cached, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
@@ -27,6 +27,7 @@ from .cells import (
     face_gap,
     gather,
     insert,
+    level_starts,
     map_dist,
     mark,
     no_grid,
@@ -54,7 +55,7 @@ def _neighbour_list():
     return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
 
 
-@jit
+@borrow
 def _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
     """Put a new walker at w: uniformly on the launch circle (sphere), on the
     launch line (plane) above a substrate, or, with ``launch_box``, on the
@@ -84,9 +85,9 @@ def _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
     return s0, s1, s2, s3
 
 
-@jit
+@borrow
 def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi,
-          pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, geo, rs, rng):
+          pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, pstart, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
 
     Parameters
@@ -101,7 +102,8 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
         Receives the walker's place where it sticks.
     rs : uint64 (4,)
         The xoshiro256+ stream; ``rng`` the numpy Generator.
-    The rest: scratch arrays, the neighbour lists and the grid (``cells``);
+    The rest: scratch arrays, the neighbour lists and the grid (``cells``),
+    ``pstart`` the distance pyramid's level starts (``maps.pyramid_starts``);
     ``geo`` holds r_max, the Chebyshev extent and h_max.
 
     Returns
@@ -110,9 +112,8 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
         True when a walker stuck at w, False when the budget ran out.
     total, pending : int
 
-    Every array is an argument (borrowed, no reference counting) and the hot
-    path calls no array-taking helper that numba does not inline; see the
-    package note.
+    Every array is an argument, borrowed (``_jit.borrow``: no reference
+    counting, and nothing allocated here); see the package note.
     """
     dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
     jumps, max_steps, ret, kill = model.jumps, model.max_steps, model.exact_return, model.kill
@@ -128,7 +129,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     RL2 = RL * RL
     up = dim - 1
     r_max, extent, h_max = geo[0], geo[1], geo[2]
-    per, m0, m1, m2, W, fw, fcap, flo, ftop, pstart, low = walk_geometry(gi, cells, dim)
+    per, m0, m1, m2, W, fw, fcap, flo, ftop, low = walk_geometry(gi, cells, dim)
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
@@ -415,6 +416,7 @@ def _grow(n, model, marks, rng, times):
             geo[1] = max(geo[1], abs(pts[q, a]))
         geo[0] = max(geo[0], np.sqrt(r2))
     grid = build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
+    pstart = level_starts(grid[0], dim)
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
     if model.walkers > 1:
@@ -439,6 +441,7 @@ def _grow(n, model, marks, rng, times):
             # Built here, not where the old grid was outgrown: numba frees an array
             # held across a loop's passes only when the pass ends (as in the lattice kernel).
             grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid)
+            pstart = level_starts(grid[0], dim)
             regrid = -1
         launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
         if model.launch_box:
@@ -451,7 +454,7 @@ def _grow(n, model, marks, rng, times):
         gi, gf, words, start, blocks, cells, dirr, heads, field = grid
         stuck, total, pending = _walk(model, launch_r, model.kill_factor * launch_r, total, pending, w, u, normal,
                                       scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
-                                      blocks, cells, dirr, heads, field, geo, rs, rng)
+                                      blocks, cells, dirr, heads, field, pstart, geo, rs, rng)
         if not stuck:
             status = codes.STEP_LIMIT
             break
