@@ -224,7 +224,7 @@ def field_size(dim, fw):
     return (((fw + (1 << t) - 1) >> t) << t) ** dim
 
 
-@jit
+@borrow
 def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
     """Lower the distances within ``reach`` (at most ``cap``) about a particle in cell (ci, cj, ck).
 
@@ -325,7 +325,7 @@ def pyramid_allocate(dim, width, cap, most=64):
     return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)
 
 
-@jit
+@borrow
 def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
     """Record a particle in cell (i, j, k) on every level: lower the distances
     within ``reach`` (the cap, or 1 to mark only the particle's own cells for

@@ -139,7 +139,7 @@ def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     return heads
 
 
-@jit
+@borrow
 def mark(i, pts, dim, size, gi, words, start, blocks, cells, field, spread):
     """Mark particle i in the maps and the field, with its periodic images
     near the edges; the field's distances within ``spread`` coarse cells (the
@@ -175,7 +175,7 @@ def _allocate_maps(dim, width):
     return maps.zeroed(start[-1], np.uint64), start, blocks, cells
 
 
-@jit
+@borrow
 def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
     """Set cell (i, j, k) and its neighbours in the dilated levels 1 to top - 1."""
     bs = 3 if dim == 2 else 2
