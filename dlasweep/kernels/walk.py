@@ -9,7 +9,7 @@ numba).
 
 import numpy as np
 
-from .._jit import inline, jit
+from .._jit import borrow, inline, jit
 
 
 @jit
@@ -102,7 +102,7 @@ def direction(rng, dim, out):
     out[2] = 1.0 - 2.0 * s
 
 
-@jit
+@borrow
 def return_to_sphere(rng, dim, pos, radius, scratch):
     """Move a walker at ``|pos| > radius`` to where it first hits the sphere.
 
@@ -152,7 +152,7 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
     return True
 
 
-@jit
+@borrow
 def return_to_plane(rng, dim, pos, height, width):
     """Move a walker above ``height`` (last axis up) to where it first hits it.
 

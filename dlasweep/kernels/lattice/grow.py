@@ -19,7 +19,7 @@ exactly (Poisson kernel) instead of wandering off.
 
 import numpy as np
 
-from ..._jit import cached, clock, jit
+from ..._jit import borrow, cached, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import GRID_GROWTH, STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
@@ -58,7 +58,7 @@ def _site(x):
     return np.int64(np.floor(x + 0.5))
 
 
-@jit
+@borrow
 def _outside(q, dim, line, lo, hi):
     """Whether site q has left the box (for substrates: through the top)."""
     if line:
@@ -69,7 +69,7 @@ def _outside(q, dim, line, lo, hi):
     return False
 
 
-@jit
+@borrow
 def _near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
     """One site of the exact lattice walk: stick, or step to a random neighbour.
 
@@ -96,7 +96,7 @@ def _near_step(words, dim, start, blocks, width, off, q, moves, period, stickine
     return False
 
 
-@jit
+@borrow
 def _near_walk(
     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
     boxed, lo, hi, radius, budget,
@@ -132,7 +132,7 @@ def _near_walk(
                 return False, taken
 
 
-@jit
+@borrow
 def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
     """Whether site q touches a particle (or the substrate) under ``moves``:
     ``words.in_contact`` as the single walker's hot loop reads the words,
@@ -154,7 +154,7 @@ def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
     return touch
 
 
-@jit
+@borrow
 def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1, s2, s3):
     """One lattice step from site q to a random neighbour, into ``pos``
     unless the neighbour is occupied (or below the substrate); the stream
@@ -211,7 +211,7 @@ def _no_grid():
     return np.zeros(0, np.uint64), none, none, none, np.zeros(0, np.uint8)
 
 
-@jit
+@borrow
 def _release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
     """Release a walker: fill ``pos[:dim]`` with a uniform point of where walkers start.
 
@@ -239,7 +239,7 @@ def _release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
             pos[a] = launch_r * pos[a]
 
 
-@jit
+@borrow
 def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0, cap, low, level, i, j, k):
     """A lower bound of the Chebyshev distance from grid site (i, j, k) to
     the cluster, or 0 when a particle may lie within two sites.
