@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .._jit import clock, inline, jit
+from .._jit import borrow, clock, inline, jit
 from ..params import SEED_SHAPES, STATUSES
 from .walk import xo
 
@@ -73,7 +73,7 @@ def model_from(p) -> Model:
     )
 
 
-@jit
+@borrow
 def sticks(stickiness, rng):
     """The sticking rule: a walker at contact sticks with probability
     ``stickiness``, drawn from the numpy Generator ``rng``; at 1 nothing is drawn."""

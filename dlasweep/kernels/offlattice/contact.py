@@ -8,7 +8,7 @@ rounding, never less) and never passes through a branch.
 
 import numpy as np
 
-from ..._jit import inline, jit
+from ..._jit import borrow, inline, jit
 from ..model import sticks
 from ..walk import unit_vector
 from .cells import gather, map_dist
@@ -56,13 +56,13 @@ def ray_to(w, u0, u1, u2, length, nl, lx, ly, lz, line, dim):
     return best, hit
 
 
-@jit
+@borrow
 def ray(w, u, length, nl, lx, ly, lz, line, dim):
     """``ray_to`` along the direction ``u[:3]``."""
     return ray_to(w, u[0], u[1], u[2], length, nl, lx, ly, lz, line, dim)
 
 
-@jit
+@borrow
 def settle(w, u, t, hit, dim, lx, ly, lz, li, normal):
     """Move w to w + t u and put it at distance 1 exactly from what it hit;
     ``normal`` gets the outward unit normal at the contact in its first
@@ -90,7 +90,7 @@ def settle(w, u, t, hit, dim, lx, ly, lz, li, normal):
     w[2] = lz[hit] + normal[2]
 
 
-@jit
+@borrow
 def cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal):
     """Ray cast of w along u straight from the cell list; moves w.
 
@@ -158,7 +158,7 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
     return cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal)
 
 
-@jit
+@borrow
 def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     """A walker at contact: sticks with probability ``stickiness`` (True), else
     moves away by ``REJECT`` into the outward half-space, ray-cast, and
