@@ -19,6 +19,7 @@ CASES = [
     dict(model="offlattice", dim=2, stickiness=0.3),
     dict(model="offlattice", dim=2, seed_shape="line", size=200),
     dict(model="offlattice", dim=2, launch="box", size=400),
+    dict(model="offlattice", dim=2, walkers=3000, size=300),
 ]
 
 SCRIPT = """

@@ -309,3 +309,40 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
     for values, (mean, spread) in zip((rg, ratio), before):
         se = mean * spread * np.sqrt(2 / 16)
         assert abs(np.mean(values) - mean) < 3.5 * se, (np.mean(values), mean)
+
+
+def _found(pts, nxt, i, grid):
+    """Whether the cell list finds particle i at its own centre."""
+    from dlasweep.kernels.offlattice import cells
+    gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
+    lx, ly, lz, li = (np.empty(1024), np.empty(1024), np.zeros(1024), np.empty(1024, np.int64))
+    nl, _ = cells.gather(np.r_[pts[i], 0.0], 0.25, 2, 0, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+    return i in li[:nl]
+
+
+def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
+    """A grid built with no room reserved gives its heads more room as tiles
+    fill (``cells.more_heads``), and a particle attached when they are full
+    waits (``HEADS_FULL``) and is put in by ``_index_late``: each is then
+    found where it is."""
+    from dlasweep.kernels.offlattice import cells, grow
+    rng = np.random.default_rng(5)
+    n = 4000
+    pts = np.zeros((n + 1, 2))
+    pts[:n] = rng.uniform(-1500, 1500, (n, 2))
+    nxt = np.full(n + 1, -1, np.int32)
+    grid = cells.build_grid(2, False, 0, 1600.0, pts, n, nxt, 0)
+    gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
+    assert gi[cells.TILES_USED] > 64  # beyond the 64 tiles reserved: the heads grew
+    assert all(_found(pts, nxt, i, grid) for i in range(0, n, 7))
+    # heads exactly full: a particle in a tile of its own must wait
+    heads = heads[: 64 * gi[cells.TILES_USED]].copy()
+    geo = np.array([1500.0 * np.sqrt(2), 1500.0, -1.0])
+    far = np.array([1550.0, 1550.0, 0.0])
+    steps, parents = np.zeros(n + 1, np.uint32), np.zeros(n + 1, np.int32)
+    count, code = grow._attach(far, 0, n, 5, pts, steps, parents, nxt, geo, 2, False, 0, gi, gf, words, start, blocks,
+                               cellz, dirr, heads, field)
+    assert (count, code) == (n + 1, grow.HEADS_FULL)
+    heads = grow._index_late(n, pts, nxt, 2, 0, gi, gf, words, start, blocks, cellz, dirr, heads, field)
+    grid = gi, gf, words, start, blocks, cellz, dirr, heads, field
+    assert _found(pts, nxt, n, grid) and all(_found(pts, nxt, i, grid) for i in range(0, n, 7))

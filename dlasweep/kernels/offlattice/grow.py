@@ -30,6 +30,7 @@ from .cells import (
     level_starts,
     map_dist,
     mark,
+    more_heads,
     no_grid,
     pyramid_dist,
     walk_geometry,
@@ -338,14 +339,21 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     return code == 1, total, pending
 
 
-@jit
-def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line, size, grid):
+IN_GRID = -1
+"""``_attach``: the particle is in the grid."""
+HEADS_FULL = -2
+"""``_attach``: the particle waits for the cell list's heads to grow (``_index_late``)."""
+
+
+@borrow
+def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line, size, gi, gf, words, start, blocks,
+            cells, dirr, heads, field):
     """Add the walker at w to the cluster, its parent the particle it touched
-    (``contact.settle`` records it); returns the new count,
-    the grid and, when the cluster outgrew the grid, its count of cell-list
-    tiles, else -1 (then the particle is not yet in the grid: the caller
-    drops it and builds a larger one)."""
-    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+    (``contact.settle`` records it). Returns the new count and ``IN_GRID``,
+    ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
+    cell-list tiles (then the particle is not yet in the grid: the caller
+    drops it and builds a larger one). It takes the grid's arrays one by one
+    and returns none: a tuple of them cost reference counting at each particle."""
     up = dim - 1
     if line:
         for a in range(up):
@@ -366,10 +374,20 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
     count += 1
     need = geo[2] if line else geo[1]
     if need + 8.0 > gi[COVERED]:
-        return count, grid, gi[TILES_USED]
-    heads = insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads)
+        return count, gi[TILES_USED]
+    if not insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads):
+        return count, np.int64(HEADS_FULL)
     mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
-    return count, (gi, gf, words, start, blocks, cells, dirr, heads, field), np.int64(-1)
+    return count, np.int64(IN_GRID)
+
+
+@jit
+def _index_late(i, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr, heads, field):
+    """Put particle i, which found the heads full, in the grid; returns the larger heads."""
+    heads = more_heads(heads)
+    insert(i, pts, nxt, dim, gi, gf, dirr, heads)
+    mark(i, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
+    return heads
 
 
 @jit
@@ -415,13 +433,14 @@ def _grow(n, model, marks, rng, times):
             r2 += pts[q, a] ** 2
             geo[1] = max(geo[1], abs(pts[q, a]))
         geo[0] = max(geo[0], np.sqrt(r2))
-    grid = build_grid(dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
-    pstart = level_starts(grid[0], dim)
+    gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
+        dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
+    pstart = level_starts(gi, dim)
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
     if model.walkers > 1:
         count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, nxt, count, geo,
-                                  grid)
+                                  (gi, gf, words, start, blocks, cells, dirr, heads, field))
         return pts, steps, parents, count, status
     w = np.zeros(3)
     u = np.zeros(3)
@@ -440,8 +459,9 @@ def _grow(n, model, marks, rng, times):
         if regrid >= 0:
             # Built here, not where the old grid was outgrown: numba frees an array
             # held across a loop's passes only when the pass ends (as in the lattice kernel).
-            grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid)
-            pstart = level_starts(grid[0], dim)
+            gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
+                dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid)
+            pstart = level_starts(gi, dim)
             regrid = -1
         launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
         if model.launch_box:
@@ -451,18 +471,18 @@ def _grow(n, model, marks, rng, times):
         elif boxed and launch_r > hb - 1.0:
             status = codes.BOUNDARY
             break
-        gi, gf, words, start, blocks, cells, dirr, heads, field = grid
         stuck, total, pending = _walk(model, launch_r, model.kill_factor * launch_r, total, pending, w, u, normal,
                                       scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start,
                                       blocks, cells, dirr, heads, field, pstart, geo, rs, rng)
         if not stuck:
             status = codes.STEP_LIMIT
             break
-        count, grid, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line, size,
-                                     grid)
-        if tiles >= 0:  # dropped now (every name of it), the larger one built at the top of the next pass
-            grid = no_grid()
-            gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+        count, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line, size, gi, gf,
+                               words, start, blocks, cells, dirr, heads, field)
+        if tiles == HEADS_FULL:
+            heads = _index_late(count - 1, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr, heads, field)
+        elif tiles >= 0:  # dropped now (every name of it), the larger one built at the top of the next pass
+            gi, gf, words, start, blocks, cells, dirr, heads, field = no_grid()
             regrid = tiles
         pending = 0
         passed = checkpoint(marks, times, passed, count, t0)
@@ -485,6 +505,7 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, 
     up = dim - 1
     hb = 0.5 * size
     gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+    grid = no_grid()  # held by the names above alone, so that a rebuild frees the old arrays
     pos = np.zeros((walkers, 3))
     alive = np.ones(walkers, np.bool_)
     w = np.zeros(3)
@@ -545,13 +566,15 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, 
                     total += moves
                     pending += moves
             if stuck:
-                count, grid, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line,
-                                             size, grid)
-                if tiles >= 0:
-                    grid = no_grid()
-                    gi, gf, words, start, blocks, cells, dirr, heads, field = grid
-                    grid = build_grid(dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
-                gi, gf, words, start, blocks, cells, dirr, heads, field = grid
+                count, tiles = _attach(w, normal[3], count, pending, pts, steps, parents, nxt, geo, dim, line, size,
+                                       gi, gf, words, start, blocks, cells, dirr, heads, field)
+                if tiles == HEADS_FULL:
+                    heads = _index_late(count - 1, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr,
+                                        heads, field)
+                elif tiles >= 0:
+                    gi, gf, words, start, blocks, cells, dirr, heads, field = no_grid()
+                    gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
+                        dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
                 pending = 0
                 alive[k] = False
                 live -= 1
