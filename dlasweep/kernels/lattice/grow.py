@@ -258,8 +258,8 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
     if 0 <= i < width and 0 <= j < width and 0 <= k < width:
         cell = low
         if level == 0:
-            # the field, read here: most walkers are near the cluster, and
-            # pyramid_find passes the arrays on, which costs reference counting
+            # the field, read here: most walkers are near the cluster, and the
+            # pyramid's search is a call
             ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
             cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
         if cell >= low:
@@ -442,8 +442,8 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 cell = low
                 if level == 0:
-                    # the field, read here: most walkers are near the cluster, and
-                    # pyramid_find passes the arrays on, which costs reference counting
+                    # the field, read here: most walkers are near the cluster, and the
+                    # pyramid's search is a call
                     ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
                     cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
                 if cell >= low:
