@@ -231,9 +231,9 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
     A field stores ``cap - distance``: zero is the cap, so a page that no
     particle came within reach of is never written and takes no memory.
     Each row is taken a tile's stretch at a time, whose cells lie side by
-    side, by a branch-free maximum the compiler vectorises: a compare and
-    store per cell, or rings about the cell that stop where nothing drops,
-    cost 0.2 s more a 2D off-lattice cluster of 1e6.
+    side, by a branch-free maximum the compiler vectorises: rings about the
+    cell that stop where nothing drops marked a 2D off-lattice cluster of
+    1e6 in 0.78 s, these rows in 0.57.
     """
     reach -= 1
     last = (1 << FIELD_TILE[dim]) - 1
@@ -332,8 +332,8 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
     ``pyramid_fill``). A level whose cell already holds a particle has every
     coarser one marked too.
 
-    Returns the first level whose cell already held a particle (the number
-    of levels when none did). Each level's start is summed on the way (an
+    Returns the first level whose cell already held a particle, -1 when
+    none did. Each level's start is summed on the way (an
     array of them, allocated at every particle, cost more than the marking).
     """
     levels = pyramid_levels(dim, width, cap, most)
@@ -347,7 +347,7 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
         size = field_size(dim, fw)
         field_lower(pyramid[base:base + size], dim, fw, cap, reach, ci, cj, ck)
         base += size
-    return levels
+    return -1
 
 
 @jit

@@ -163,9 +163,7 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field, spread):
                 # a pyramid level whose cell already held a particle has that particle's
                 # map levels from its cells' side up marked: only the finer ones are left
                 held = maps.pyramid_mark(field, dim, W, i0, i1, i2, gi[FIELD_CAP], spread, gi[PYRAMID_LEVELS])
-                top = len(cells)
-                if held < maps.pyramid_levels(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS]):
-                    top = min(top, FS + maps.PYRAMID_STEP[dim] * held)
+                top = len(cells) if held < 0 else min(len(cells), FS + maps.PYRAMID_STEP[dim] * held)
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
 
 
