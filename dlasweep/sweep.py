@@ -409,10 +409,11 @@ def _compute(client, spec, todo, parts, bar, stream=None):
                            with_results=True, raise_errors=False)
     for future, results in running:
         batch = batch_of.pop(future.key)
-        if future.status != "finished":
-            # Dask gave up on it (its workers kept dying: KilledWorker) or it was cancelled.
-            error = results[1] if future.status == "error" else None
-            message = f"{type(error).__name__}: {error}" if error else f"task {future.status}"
+        if not isinstance(results, list):
+            # Dask gave up on it (its workers kept dying: KilledWorker: a (type, error, traceback)) or it
+            # was cancelled. Not the status: a result gathered before its worker died reads "lost" (dask
+            # computes it again for this future), yet the results in hand are whole.
+            message = f"{type(results[1]).__name__}: {results[1]}" if isinstance(results, tuple) else "task cancelled"
             results = [error_result(counts, len(scales), task.params["dim"], message) for task in batch]
         finished = {task.key: result for task, result in zip(batch, results)}
         parts.write(finished)

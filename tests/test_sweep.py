@@ -152,6 +152,29 @@ def test_a_raising_task_is_recorded_and_retried_on_resume(size, tmp_path, dask_c
     healed.close()
 
 
+class _Lost:
+    """A future whose worker died after its result was gathered: dask marks it "lost" and computes it again."""
+    status = "lost"
+
+    def __init__(self, future):
+        self.key, self.release = future.key, future.release
+
+
+def test_a_result_gathered_before_its_worker_died_is_kept(tmp_path, dask_client, reference, monkeypatch):
+    import distributed
+
+    class losing(distributed.as_completed):
+        def __next__(self):
+            future, results = super().__next__()
+            return _Lost(future), results
+
+    monkeypatch.setattr(distributed, "as_completed", losing)
+    ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
+    assert "failed_tasks" not in ds.attrs
+    xr.testing.assert_identical(science(ds), science(reference))
+    ds.close()
+
+
 def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, monkeypatch, reference):
     # Chunks of 16 values, tasks of one cluster: each finished cluster fills chunks at once.
     monkeypatch.setattr(store, "PARTICLE_CHUNK", 16)
