@@ -84,6 +84,26 @@ def lattice_exits(moves, r, walks, rng):
     return x
 
 
+def brownian_square_exits(dim, n, rng, eps=1e-7):
+    """Where ``n`` Brownian paths from the centre first leave the square (cube) [-1, 1]^dim, by
+    walk-on-spheres: jump to a uniform point of the largest sphere inside, until within ``eps`` of a
+    face, then onto it. Returns (n, dim) points of the boundary."""
+    x = np.zeros((n, dim))
+    alive = np.ones(n, bool)
+    while alive.any():
+        idx = np.flatnonzero(alive)
+        gap = 1.0 - np.abs(x[idx]).max(1)
+        done = gap < eps
+        out = idx[done]
+        axis = np.abs(x[out]).argmax(1)
+        x[out, axis] = np.sign(x[out, axis])
+        alive[out] = False
+        idx = idx[~done]
+        u = rng.normal(size=(len(idx), dim))
+        x[idx] += gap[~done, None] * u / np.linalg.norm(u, axis=1, keepdims=True)
+    return x
+
+
 def walk_on_spheres_exterior(dim, r0, far, n, rng, eps=1e-7):
     """Brownian paths from radius ``r0`` by walk-on-spheres in the shell 1 < r < ``far``.
 

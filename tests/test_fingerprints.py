@@ -12,6 +12,10 @@ Renewed, with the reason: ``lattice-2d/30000/3``, ``off-2d/30000/3`` and
 from the distance pyramid instead of the dilated maps (issue 25): longer
 jumps, the same law (``test_lattice.test_jumps_grow_the_clusters_single_steps_grow``,
 ``test_offlattice.test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound``).
+``lattice-2d/30000/3`` again when lattice walkers far from the cluster jumped out of the
+square free of particles instead of its inscribed circle (issue 25): the same Brownian
+approximation, longer jumps (``test_lattice.test_square_exit_is_where_brownian_motion_leaves_the_square``,
+``test_lattice.test_square_jumps_keep_the_2d_clusters_of_the_circle_jumps``).
 """
 
 import hashlib
@@ -75,7 +79,7 @@ FINGERPRINTS = {
     "off-step/600/1": "f60fde86601eb6c5",
     "off-walkers/600/0": "adc7e7db07a8401a",
     "off-walkers/600/1": "225c987eeb17b42b",
-    "lattice-2d/30000/3": "0e5b068767175608",
+    "lattice-2d/30000/3": "ab1dae90840c0827",
     "off-2d/30000/3": "72d5055351384c91",
     "lattice-3d/8000/3": "7dd6d1565ab6dc6d",
     "off-3d/8000/3": "e245fd051bf81dc3",

@@ -1,20 +1,26 @@
-"""The lattice walk's exact first-passage jumps: where the walk first leaves a
+"""The lattice walk's first-passage jumps: where the walk first leaves a
 square (cube), tabulated.
 
 ``exit_law`` is the exact law of the exit site from the centre of the square
 (cube) of half-width r; ``exit_tables`` pools it by symmetry class into alias
 tables for r up to ``TABLE_MAX``, which the growth samples with two draws: a
 class (``alias_table``), then a uniform symmetry of the square (``symmetry``).
+Beyond ``TABLE_MAX`` the walk is Brownian at the scale of the jump, and
+``square_exit`` draws where Brownian motion leaves the square (cube) from the
+Brownian law of one face (``face_law``), in ``FACE_BINS`` bins a side.
 """
 
 from functools import cache
 
 import numpy as np
 
-from ..._jit import jit
+from ..._jit import borrow, jit
 from ..stored import kept_on_disk
+from ..walk import xo
 
 TABLE_MAX = (0, 0, 64, 24)  # by dimension: largest square (cube) half-width with an exit table
+FACE_BINS = (0, 0, 1024, 64)  # by dimension: bins on a side of a face for the Brownian exit
+FACE_MODES = 41  # odd Fourier modes up to this in face_law: the next weighs below exp(-64)
 
 
 @cache
@@ -115,6 +121,31 @@ def symmetry_classes(sites, probs):
     return reps, np.bincount(inverse.reshape(-1), weights=probs, minlength=len(reps))
 
 
+def face_law(dim):
+    """Where Brownian motion from the centre of the square (cube) [-1, 1]^dim
+    first leaves it, in bins of the face x_0 = 1: ``FACE_BINS[dim]`` a side.
+
+    The harmonic measure of the face from the centre is the series
+    sum over odd m (and n) of cos(m pi y / 2) [cos(n pi z / 2)] / (2 cosh(pi |(m, n)| / 2)),
+    the solution of Laplace's equation in the square (cube) by separation of
+    variables; each term's integral over a bin is in closed form. The face
+    holds 1 / (2 dim) of the law.
+
+    Returns
+    -------
+    float (FACE_BINS[dim] ** (dim - 1),), the bins' probabilities, y fastest
+    """
+    bins = FACE_BINS[dim]
+    edges = np.linspace(-1.0, 1.0, bins + 1)
+    modes = np.arange(1, FACE_MODES + 1, 2)
+    # integral of cos(m pi y / 2) over each bin: [m, bin]
+    part = np.diff(np.sin(np.outer(modes, edges) * np.pi / 2), axis=1) * (2.0 / (np.pi * modes[:, None]))
+    if dim == 2:
+        return (part / (2.0 * np.cosh(np.pi * modes / 2))[:, None]).sum(0)
+    weight = 1.0 / (2.0 * np.cosh(np.pi * np.hypot.outer(modes, modes) / 2))  # [m (z), n (y)]
+    return (part.T @ weight @ part).reshape(-1)  # [z bin, y bin]
+
+
 @kept_on_disk
 def exit_tables(dim, moore):
     """Alias tables of ``exit_law`` by symmetry class (``symmetry_classes``) for
@@ -142,6 +173,48 @@ def exit_tables(dim, moore):
         offsets.append(off)
         start[r + 1:] = start[r] + len(probs)
     return start, np.concatenate(cuts), np.concatenate(aliases), np.concatenate(offsets)
+
+
+# module constants, so that the walk's loop reads them without counting references (numba freezes them)
+FACE_CUT_2D, FACE_ALIAS_2D = alias_table(face_law(2))
+FACE_CUT_3D, FACE_ALIAS_3D = alias_table(face_law(3))
+
+
+@borrow
+def square_exit(s0, s1, s2, s3, dim):
+    """Where Brownian motion from the centre first leaves the square (cube)
+    [-1, 1]^dim: a bin of ``face_law`` by its alias table (``FACE_CUT_2D``...),
+    a uniform point in it, and a uniform face. The stream's state in registers
+    (``walk.xo``).
+
+    Returns
+    -------
+    s0, s1, s2, s3 : the state
+    o0, o1, o2 : the point (o2 = 0 in 2D)
+    """
+    bins = FACE_BINS[dim]
+    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+    x = u * bins ** (dim - 1)
+    b = np.int64(x)
+    if dim == 2:
+        if x - b >= FACE_CUT_2D[b]:
+            b = np.int64(FACE_ALIAS_2D[b])
+    elif x - b >= FACE_CUT_3D[b]:
+        b = np.int64(FACE_ALIAS_3D[b])
+    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+    y = ((b % bins) + u) * (2.0 / bins) - 1.0
+    z = 0.0
+    if dim == 3:
+        s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+        z = ((b // bins) + u) * (2.0 / bins) - 1.0
+    s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
+    face = np.int64(u * 2 * dim)
+    side = 1.0 if face & 1 else -1.0
+    if face >> 1 == 0:
+        return s0, s1, s2, s3, side, y, z
+    if face >> 1 == 1:
+        return s0, s1, s2, s3, y, side, z
+    return s0, s1, s2, s3, y, z, side
 
 
 @jit

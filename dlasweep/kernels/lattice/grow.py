@@ -11,9 +11,11 @@ else from the distance pyramid (``maps.pyramid_find``): coarse Chebyshev
 distance fields, each level's cells four (3D: two) times wider, so that a
 walker far from the cluster reads a bound within a cell or two of the truth
 from an array that stays in cache.
-Far from the cluster (beyond the distances the tables cover) the walker moves
-by walk-on-circles/spheres jumps, which treat the lattice walk as Brownian at
-scales of ``CIRCLE_MIN`` sites and more; outside the launch circle it returns
+Far from the cluster (beyond the distances the tables cover) the walk is
+taken as Brownian at scales of ``CIRCLE_MIN`` sites and more: the walker
+jumps to where Brownian motion leaves the square (cube) free of particles
+about it (``exits.square_exit``), or the circle (sphere) where that reaches
+farther (outside the cluster's circle); outside the launch circle it returns
 exactly (Poisson kernel) instead of wandering off.
 """
 
@@ -33,7 +35,7 @@ from ..walk import (
     xdir,
     xo,
 )
-from .exits import TABLE_MAX, exit_tables, symmetry, unit_moves
+from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
 from .parents import lattice_parents
 from .words import (
     FIELD_CAP,
@@ -510,27 +512,32 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             free = r - (h_max if line else r_max)  # Euclidean, from the float position
             if line:
                 d = min(max(d, np.int64(free)), period, q[up] + 1)
-            free = max(free, d - rounding)
-            if line:
                 free = min(free, pos[up] + 1.0)
-            reach = free - JUMP_MARGIN
+            square = d - rounding - JUMP_MARGIN  # half-width of the square (cube) free of particles
+            reach = max(free - JUMP_MARGIN, square)
             half = min(d - 1, top)
             if kill:
                 reach = min(reach, kill_r - r)
+                square = min(square, (kill_r - r) / np.sqrt(dim))  # its corners inside the kill circle
                 qr = np.sqrt(float(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]))
                 half = min(half, np.int64((kill_r - qr) / np.sqrt(dim)) + 1)
             if boxed:
                 for a in range(dim):
                     reach = min(reach, pos[a] - lo, hi - pos[a])
+                    square = min(square, pos[a] - lo, hi - pos[a])
                     half = min(half, q[a] - lo + 1, hi - q[a] + 1)
             elif line and launch_box:
                 reach = min(reach, box_hi - pos[up])
+                square = min(square, box_hi - pos[up])
                 half = min(half, box_hi - q[up] + 1)
             total += 1
             pending += 1
             budget -= 1
             if reach >= CIRCLE_MIN and reach > half:
-                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                if square >= reach:  # the square (cube) reaches as far as the circle, and holds more
+                    s0, s1, s2, s3, u0, u1, u2 = square_exit(s0, s1, s2, s3, dim)
+                else:
+                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 pos[0] += reach * u0
                 pos[1] += reach * u1
                 pos[2] += reach * u2
