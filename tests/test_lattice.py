@@ -357,8 +357,8 @@ def test_distance_bound_is_zero_near_the_cluster_and_a_lower_bound_beyond(dim, w
 
 
 def test_jumps_grow_the_clusters_single_steps_grow():
-    """16 square-lattice clusters of 4000 grown with the jumps (square exits,
-    the distance pyramid's circle jumps far from the cluster) against 16
+    """16 square-lattice clusters of 4000 grown with the jumps (exact square exits,
+    the distance pyramid's Brownian jumps far from the cluster) against 16
     grown by single lattice steps only: mean Rg and Rg/Rmax agree.
 
     At 4000 particles walkers released on the launch circle start up to 60

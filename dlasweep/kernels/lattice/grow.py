@@ -49,8 +49,8 @@ from .words import (
     word_at,
 )
 
-JUMP_MARGIN = 2.0  # sites kept between a circle jump and the nearest particle
-CIRCLE_MIN = 16.0  # smallest circle jump: below it the exact square jumps do the work
+JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
+CIRCLE_MIN = 16.0  # smallest Brownian jump: below it the exact square jumps do the work
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into _attach
 
 
