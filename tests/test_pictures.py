@@ -36,7 +36,9 @@ def test_default_resolution_fits_the_cluster(tmp_path):
     small, large = dla.grow(100, seed=1), dla.grow(100_000, seed=1)
     width, _ = png_size(draw_cluster(small.points, small.params, tmp_path / "s.png"))
     assert 1000 < width <= 4000
-    assert png_size(draw_cluster(large.points, large.params, tmp_path / "l.png"))[0] > 1500  # not 660
+    extent = np.ptp(large.points, axis=0).max() + 1
+    assert extent > 1000  # a pixel a site needs more than the smallest picture: not 660 pixels
+    assert extent < png_size(draw_cluster(large.points, large.params, tmp_path / "l.png"))[0] <= 4000
 
 
 @pytest.mark.parametrize("side, inches, dpi", [(40, 6, None), (40, 6, 100), (37, 3, 77), (400, 2, 100)])
