@@ -299,7 +299,7 @@ def walk_geometry(gi, cells, dim):
     """The grid's scalar constants that ``walk_bound`` takes, worked out once per walk:
     (periodic, m0, m1, m2, W, fw, fcap, flo, ftop, low), ``low`` the distance
     pyramid's ``maps.pyramid_low``. (Its level starts, an array, come from
-    ``maps.pyramid_starts`` once per grid: the walk allocates nothing.)"""
+    ``level_starts`` once per grid: the walk allocates nothing.)"""
     ftop = min(len(cells) - 1, gi[TOP_LEVEL]) + 1
     fcap = gi[FIELD_CAP]
     # a field at its cap puts every particle (cap - 1) coarse cells away, so

@@ -104,7 +104,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     rs : uint64 (4,)
         The xoshiro256+ stream; ``rng`` the numpy Generator.
     The rest: scratch arrays, the neighbour lists and the grid (``cells``),
-    ``pstart`` the distance pyramid's level starts (``maps.pyramid_starts``);
+    ``pstart`` the distance pyramid's level starts (``cells.level_starts``);
     ``geo`` holds r_max, the Chebyshev extent and h_max.
 
     Returns
