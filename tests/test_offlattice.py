@@ -295,7 +295,8 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
     the cluster (commit 1454851, measured: ``before``, each a mean and its
     seed-to-seed spread). The difference of two 16-seed means has a standard
     error of sqrt(2/16) spreads (about 1% for Rg, 2% for Rg/Rmax); asserted
-    within 3.5 of them. Measured after: 2D Rg 97.848, 3D 25.855.
+    within 3.5 of them. Measured after: 2D Rg 97.848, 3D 25.855; 3D 25.714
+    (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``cells.FCAP``).
 
     Single unit steps (``jumps=False``) are no reference here: steps of a
     diameter are a different walk, and its 2D clusters are 10% smaller
