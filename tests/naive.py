@@ -233,3 +233,17 @@ def field_distances(field, dim, fw, cap):
     for c in np.ndindex(*out.shape):
         out[c] = cap - int(field[maps.field_cell(dim, fw, *c, *([0] * (3 - dim)))])
     return out
+
+
+def centre_distances(unit, dim, fw, side, units, top):
+    """The centre field a kernel should hold, as an array of ``fw`` coarse cells a side:
+    the distance from each cell's centre (cells of ``side`` sites) to the nearest of the
+    unit cells ``unit`` (whole sites, one a row), in ``units`` a site rounded down, at
+    most ``top``. Brute force over every cell and unit cell."""
+    axes = np.meshgrid(*[np.arange(fw)] * dim, indexing="ij")
+    centres = np.stack(axes, -1).reshape(-1, dim) * side + side / 2
+    best = np.empty(len(centres))
+    for lo in range(0, len(centres), 256):
+        gaps = np.maximum(np.abs(centres[lo:lo + 256, None, :] - (unit[None] + 0.5)) - 0.5, 0.0)
+        best[lo:lo + 256] = (gaps**2).sum(-1).min(1)
+    return np.minimum(np.floor(np.sqrt(units * units * best)), top).astype(np.int64).reshape((fw,) * dim)

@@ -11,7 +11,7 @@ from scipy import stats
 from scipy.spatial import cKDTree
 
 import dlasweep as dla
-from dlasweep.kernels import walk
+from dlasweep.kernels import maps, walk
 
 OFF = {"model": "offlattice"}
 VARIANTS = {
@@ -233,11 +233,12 @@ def test_stickiness_makes_denser_and_kill_factor_agrees():
 
 @pytest.mark.parametrize("dim, line", [(2, False), (3, False), (2, True), (3, True)])
 def test_field_and_maps_bound_the_nearest_distance(dim, line):
-    """The free-distance bound of the distance field, the pyramid above it
-    and the maps never exceeds the brute-force nearest centre distance, and
-    the field holds the exact capped Chebyshev distance between coarse
-    cells; random clustered sets, at points near and far (where the pyramid
-    bounds)."""
+    """The free-distance bound of the centre field, the pyramid above it
+    and the maps never exceeds the brute-force nearest centre distance, the
+    centre field holds the distance from each coarse cell's centre to the
+    nearest particle's unit cell (rounded down and capped) and the pyramid's
+    first level the exact capped Chebyshev distance between its cells;
+    random clustered sets, at points near and far (where the pyramid bounds)."""
     from dlasweep.kernels.offlattice import cells as ol
 
     rng = np.random.default_rng(7 + dim + 10 * line)
@@ -251,7 +252,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     need = pts[:, -1].max() if line else np.abs(pts).max()
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
-    # the field against brute force (images included where the sides are periodic)
+    # the fields against brute force (images included where the sides are periodic)
     W, fs, cap = gi[ol.MAP_WIDTH], 1 << ol.FS, gi[ol.FIELD_CAP]
     fw = (W + fs - 1) // fs
     images = [np.zeros(dim)]
@@ -260,11 +261,21 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
         images = [(e - np.r_[np.ones(dim - 1), 0.0]) * np.r_[np.full(dim - 1, size), 0.0] for e in images]
     off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
     unit = np.concatenate([np.floor(pts + e).astype(int) + off for e in images])
-    occupied = np.unique(unit[((unit >= 0) & (unit < W)).all(1)] // fs, axis=0)
-    cellsxyz = np.stack(np.meshgrid(*[np.arange(fw)] * dim, indexing="ij"), -1).reshape(-1, dim)
-    cheb = np.minimum(cKDTree(occupied).query(cellsxyz, p=np.inf)[0], cap)
-    got = naive.field_distances(field, dim, fw, cap).reshape(-1)
-    np.testing.assert_array_equal(got, cheb)
+    unit = unit[((unit >= 0) & (unit < W)).all(1)]
+    top = ol.CENTRE_TOP[dim]
+    centre = naive.centre_distances(unit, dim, fw, fs, ol.CENTRE_UNITS[dim], top)
+    np.testing.assert_array_equal(naive.field_distances(field, dim, fw, top), centre)
+    assert ol.field_reach(ol.CCAP[dim - 2]) < ol.LINE_PAD  # a substrate's images are marked as far as it sees
+    assert (centre < top).sum() > 500  # the test sees the field, not only its cap
+    if not line:
+        shift = ol.FS + maps.PYRAMID_STEP[dim]
+        pw = (W + (1 << shift) - 1) >> shift
+        occupied = np.unique(unit >> shift, axis=0)
+        cellsxyz = np.stack(np.meshgrid(*[np.arange(pw)] * dim, indexing="ij"), -1).reshape(-1, dim)
+        cheb = np.minimum(cKDTree(occupied).query(cellsxyz, p=np.inf)[0], cap)
+        pstart = ol.level_starts(gi, dim)
+        got = naive.field_distances(field[pstart[1]:pstart[2]], dim, pw, cap).reshape(-1)
+        np.testing.assert_array_equal(got, cheb)
     # the bound against the nearest centre, at random points near and far
     spread = rng.choice([15.0, 60.0], (4000, 1))
     q = pts[rng.integers(0, n, 4000)] + rng.normal(0, 1, (4000, dim)) * spread
@@ -296,7 +307,9 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
     seed-to-seed spread). The difference of two 16-seed means has a standard
     error of sqrt(2/16) spreads (about 1% for Rg, 2% for Rg/Rmax); asserted
     within 3.5 of them. Measured after: 2D Rg 97.848, 3D 25.855; 3D 25.714
-    (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``cells.FCAP``).
+    (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``cells.FCAP``);
+    with the centre field (``cells.CCAP``): 2D Rg 96.923 (Rg/Rmax 0.5337),
+    3D 25.579 (0.5182).
 
     Single unit steps (``jumps=False``) are no reference here: steps of a
     diameter are a different walk, and its 2D clusters are 10% smaller

@@ -11,9 +11,11 @@ Two particles touch when their centres are exactly one diameter apart.
 
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
 uniformly onto the sphere whose radius is a lower bound on its free
-distance: near the cluster a coarse Chebyshev distance field, elsewhere the
-largest clear level of the dilated maps, each refined by the walker's place
-in its cell, and the bounding circle of the cluster. Outside the launch
+distance: near the cluster the centre field (the distance from the centre
+of the walker's coarse cell to the nearest particle's unit cell, less the
+walker's way to that centre), further out the distance pyramid, at contact
+range and beside periodic sides the largest clear level of the dilated
+maps, and the bounding circle of the cluster. Outside the launch
 circle it returns exactly (``walk.return_to_sphere``; above a substrate's
 launch line, ``walk.return_to_plane``).
 
@@ -59,7 +61,7 @@ the Generator, so a cluster is a function of its seed.
 
 Memory: besides the points (16 or 24 bytes each), the diffusion times (4),
 the parents (4) and the cell-list links (4), the grids take about a bit per unit cell
-(maps), a byte per cell of side ``2**FS`` (field) and 4 bytes per tile of
+(maps), a byte per cell of side ``2**FS`` (centre field) and 4 bytes per tile of
 64 cell-list cells (directory) over a square ``GROW`` times the cluster's
 extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk

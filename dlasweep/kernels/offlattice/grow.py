@@ -22,8 +22,10 @@ from .cells import (
     FIELD_CAP,
     FS,
     INF,
+    NEAR,
     TILES_USED,
     build_grid,
+    centre_gap,
     face_gap,
     gather,
     insert,
@@ -130,7 +132,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     RL2 = RL * RL
     up = dim - 1
     r_max, extent, h_max = geo[0], geo[1], geo[2]
-    per, m0, m1, m2, W, fw, fcap, flo, ftop, low = walk_geometry(gi, cells, dim)
+    per, m0, m1, m2, W, fw, fcap, etop, unit, flo, ftop, low = walk_geometry(gi, cells, dim)
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
@@ -197,7 +199,6 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
             if not exact:
                 # >>> walk_bound, spelled out: inlined by numba it made the walk 13% slower (a test
                 # holds the two texts together, and walk_bound to map_dist)
-                fside = float(1 << FS)
                 bs = 3 if dim == 2 else 2
                 bm = (1 << bs) - 1
                 x0 = w[0]
@@ -214,16 +215,13 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 dm = -1.0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    fd = fcap - np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-                    dm = 0.0
-                    if fd > 1:
-                        # no particle in the coarse cells within fd - 1 of the walker's
-                        f = face_gap(X0, X1, X2, dim, FS)
-                        dm = (fd - 1) * fside + f
+                    e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
+                    dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim)
                     lo, hi = 0, 0
-                    if fd <= 1:  # level FS's 3**dim block is the field's: set, so level 1 alone is open
+                    if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
+                        dm = 0.0
                         hi = min(ftop, FS)
-                    elif fd >= fcap:
+                    elif e == 0:
                         if len(pstart) > 2:
                             dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
                         else:
