@@ -378,9 +378,10 @@ def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
     a level at ``pyramid_low`` of the cap of the level below or more bounds
     at least as well as every finer one, so the answer is the coarsest level
     at that or more (level 0 when none is). ``low`` is level 1's: the caller
-    may keep another field at level 0 (``offlattice.cells``). Walkers move locally: from the previous answer
-    the search takes a read or two, and the coarse levels it reads for a
-    walker far from the cluster are small enough to stay in cache.
+    may keep another field at level 0 (``offlattice.cells``). Walkers move
+    locally: from the previous answer the search takes a read or two, and
+    the coarse levels it reads for a walker far from the cluster are small
+    enough to stay in cache.
 
     Returns
     -------

@@ -237,7 +237,8 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field, spread):
     reach = 1 if gi[PERIODIC] == 1 else 0
     reach2 = reach if dim == 3 else 0
     fw = (W + (1 << FS) - 1) >> FS
-    # a particle in the coarse cell itself is at most sqrt(dim) from its centre (whole sites: 2 or more from any other's)
+    # a particle in the coarse cell itself is at most sqrt(dim) from its centre
+    # (whole sites: a particle in any other cell, 2 or more)
     own = CENTRE_TOP[dim] - int(np.sqrt(float(CENTRE_UNITS[dim] ** 2 * dim)))
     for a in range(-reach, reach + 1):
         for b in range(-reach2, reach2 + 1):
@@ -373,7 +374,8 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         return dm
     if e == 0 and gi[PYRAMID_LEVELS] > 1:
         pstart = level_starts(gi, dim)
-        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[FIELD_CAP], maps.pyramid_low(dim, CCAP[dim - 2])))
+        low = maps.pyramid_low(dim, CCAP[dim - 2])
+        return max(dm, pyramid_dist(field, pstart, dim, W, X0, X1, X2, gi[FIELD_CAP], low))
     if dm <= NEAR:
         dm = 0.0
     bs = 3 if dim == 2 else 2
