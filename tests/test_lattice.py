@@ -256,7 +256,6 @@ def test_pyramid_bounds_the_distance_and_finds_its_sharpest_level_from_every_gue
     within two of that level's cells of the truth."""
     rng = np.random.default_rng(6)
     cap = FIELD_CAP[dim]
-    low = maps.pyramid_low(dim, cap)
     start = maps.pyramid_starts(dim, width, cap)
     for density in (0.00001, 0.0002):
         pts = _random_points(rng, dim, width, density)
@@ -267,7 +266,7 @@ def test_pyramid_bounds_the_distance_and_finds_its_sharpest_level_from_every_gue
         for q in rng.integers(0, width, (200, dim)):
             truth = np.abs(arr - q).max(1).min()
             q = list(q) + [0] * (3 - dim)
-            found = {maps.pyramid_find(pyramid, start, dim, width, *q, cap, low, guess) for guess in range(len(start))}
+            found = {maps.pyramid_find(pyramid, start, dim, width, *q, cap, guess) for guess in range(len(start))}
             assert len(found) == 1
             level, value = found.pop()
             if value == 0:

@@ -236,8 +236,9 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     """The free-distance bound of the centre field, the pyramid above it
     and the maps never exceeds the brute-force nearest centre distance, the
     centre field holds the distance from each coarse cell's centre to the
-    nearest particle's unit cell (rounded down and capped) and the pyramid's
-    first level the exact capped Chebyshev distance between its cells;
+    nearest particle's unit cell (rounded down and capped) and the centre
+    pyramid's first two levels the distance from each cell's centre to the
+    nearest held cell of the level below;
     random clustered sets, at points near and far (where the pyramid bounds)."""
     from dlasweep.kernels.offlattice import cells as ol
 
@@ -253,7 +254,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
     # the fields against brute force (images included where the sides are periodic)
-    W, fs, cap = gi[ol.MAP_WIDTH], 1 << ol.FS, gi[ol.FIELD_CAP]
+    W, fs = gi[ol.MAP_WIDTH], 1 << ol.FS
     fw = (W + fs - 1) // fs
     images = [np.zeros(dim)]
     if line:
@@ -268,14 +269,17 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     assert ol.field_reach(ol.CCAP[dim - 2]) < ol.LINE_PAD  # a substrate's images are marked as far as it sees
     assert (centre < top).sum() > 500  # the test sees the field, not only its cap
     if not line:
-        shift = ol.FS + maps.PYRAMID_STEP[dim]
-        pw = (W + (1 << shift) - 1) >> shift
-        occupied = np.unique(unit >> shift, axis=0)
-        cellsxyz = np.stack(np.meshgrid(*[np.arange(pw)] * dim, indexing="ij"), -1).reshape(-1, dim)
-        cheb = np.minimum(cKDTree(occupied).query(cellsxyz, p=np.inf)[0], cap)
+        # each level above: the distance from each cell's centre to the nearest held cell of the level below
         pstart = ol.level_starts(gi, dim)
-        got = naive.field_distances(field[pstart[1]:pstart[2]], dim, pw, cap).reshape(-1)
-        np.testing.assert_array_equal(got, cheb)
+        step, top = maps.PYRAMID_STEP[dim], ol.LEVEL_TOP[dim]
+        for level in (1, 2):
+            shift = ol.FS + step * level
+            pw = (W + (1 << shift) - 1) >> shift
+            held = np.unique(unit >> (shift - step), axis=0)
+            want = naive.centre_distances(held, dim, pw, 1 << step, ol.LEVEL_UNITS[dim] / (1 << step), top)
+            got = naive.field_distances(field[pstart[level]:pstart[level + 1]], dim, pw, top)
+            np.testing.assert_array_equal(got, want)
+            assert (want < top).sum() > 20
     # the bound against the nearest centre, at random points near and far
     spread = rng.choice([15.0, 60.0], (4000, 1))
     q = pts[rng.integers(0, n, 4000)] + rng.normal(0, 1, (4000, dim)) * spread
@@ -309,7 +313,8 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
     within 3.5 of them. Measured after: 2D Rg 97.848, 3D 25.855; 3D 25.714
     (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``cells.FCAP``);
     with the centre field (``cells.CCAP``): 2D Rg 96.923 (Rg/Rmax 0.5337),
-    3D 25.579 (0.5182).
+    3D 25.579 (0.5182); with the centre pyramid above it (``cells.FCAP``):
+    2D 95.862 (0.5405), 3D 25.577 (0.5335).
 
     Single unit steps (``jumps=False``) are no reference here: steps of a
     diameter are a different walk, and its 2D clusters are 10% smaller

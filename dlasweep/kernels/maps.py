@@ -326,12 +326,11 @@ def pyramid_allocate(dim, width, cap, most=64):
 
 
 @borrow
-def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64, first=0):
-    """Record a particle in cell (i, j, k) on levels ``first`` and up: lower the distances
+def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
+    """Record a particle in cell (i, j, k) on every level: lower the distances
     within ``reach`` (the cap, or 1 to mark only the particle's own cells for
     ``pyramid_fill``). A level whose cell already holds a particle has every
-    coarser one marked too. (``first`` 1 leaves level 0 to a caller that keeps
-    another field there.)
+    coarser one marked too.
 
     Returns the first level whose cell already held a particle, -1 when
     none did. Each level's start is summed on the way (an
@@ -343,20 +342,19 @@ def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64, first=0):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         fw = (width + (1 << shift) - 1) >> shift
         size = field_size(dim, fw)
-        if level >= first:
-            ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
-            if pyramid[base + field_cell(dim, fw, ci, cj, ck)] == cap:
-                return level
-            field_lower(pyramid[base:base + size], dim, fw, cap, reach, ci, cj, ck)
+        ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
+        if pyramid[base + field_cell(dim, fw, ci, cj, ck)] == cap:
+            return level
+        field_lower(pyramid[base:base + size], dim, fw, cap, reach, ci, cj, ck)
         base += size
     return -1
 
 
 @jit
-def pyramid_fill(pyramid, dim, width, cap, most=64, first=0):
-    """``_fill`` on the levels of the pyramid (of at most ``most``) from ``first`` up."""
+def pyramid_fill(pyramid, dim, width, cap, most=64):
+    """``_fill`` on the levels of the pyramid (of at most ``most``)."""
     start = pyramid_starts(dim, width, cap, most)
-    for level in range(first, len(start) - 1):
+    for level in range(len(start) - 1):
         shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
         _fill(pyramid[start[level]:start[level + 1]], dim, (width + (1 << shift) - 1) >> shift, cap)
 
@@ -369,7 +367,7 @@ def pyramid_low(dim, cap):
 
 
 @borrow
-def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
+def pyramid_find(pyramid, start, dim, width, i, j, k, cap, guess):
     """The level of the pyramid that bounds the distance from cell (i, j, k)
     best, and its value there, searched from level ``guess``.
 
@@ -377,8 +375,7 @@ def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
     sites or more away, Chebyshev. Values rise towards the finer levels, and
     a level at ``pyramid_low`` of the cap of the level below or more bounds
     at least as well as every finer one, so the answer is the coarsest level
-    at that or more (level 0 when none is). ``low`` is level 1's: the caller
-    may keep another field at level 0 (``offlattice.cells``). Walkers move
+    at that or more (level 0 when none is). Walkers move
     locally: from the previous answer the search takes a read or two, and
     the coarse levels it reads for a walker far from the cluster are small
     enough to stay in cache.
@@ -389,18 +386,18 @@ def pyramid_find(pyramid, start, dim, width, i, j, k, cap, low, guess):
     value : int
     """
     top = len(start) - 2
-    upper = pyramid_low(dim, cap)
+    low = pyramid_low(dim, cap)
     level = min(guess, top)
     value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
-    if value >= (low if level <= 1 else upper):
+    if value >= low:
         while level < top:
             up = _level_value(pyramid, start, dim, width, cap, level + 1, i, j, k)
-            if up < (low if level == 0 else upper):
+            if up < low:
                 break
             level += 1
             value = up
     else:
-        while level > 0 and value < (low if level == 1 else upper):
+        while level > 0 and value < low:
             level -= 1
             value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
     return level, value

@@ -265,7 +265,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
             ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
             cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
         if cell >= low:
-            level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
+            level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, level)
         if level > 0 or cell > 1:
             d = maps.pyramid_bound(dim, level, cell)
         else:
@@ -449,7 +449,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                     ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
                     cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
                 if cell >= low:
-                    level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, low, level)
+                    level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, level)
                 if level > 0 or cell > 1:
                     d = maps.pyramid_bound(dim, level, cell)
                 else:

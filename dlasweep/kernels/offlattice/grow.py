@@ -132,7 +132,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     RL2 = RL * RL
     up = dim - 1
     r_max, extent, h_max = geo[0], geo[1], geo[2]
-    per, m0, m1, m2, W, fw, fcap, etop, unit, flo, ftop, low = walk_geometry(gi, cells, dim)
+    per, m0, m1, m2, W, fw, etop, unit, flo, ftop = walk_geometry(gi, cells, dim)
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     while code == 0:
@@ -223,7 +223,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                         hi = min(ftop, FS)
                     elif e == 0:
                         if len(pstart) > 2:
-                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2, fcap, low))
+                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2))
                         else:
                             lo, hi = flo, ftop
                     while hi - lo > 1:
@@ -375,7 +375,7 @@ def _attach(w, parent, count, pending, pts, steps, parents, nxt, geo, dim, line,
         return count, gi[TILES_USED]
     if not insert(count - 1, pts, nxt, dim, gi, gf, dirr, heads):
         return count, np.int64(HEADS_FULL)
-    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
+    mark(count - 1, pts, dim, size, gi, words, start, blocks, cells, field)
     return count, np.int64(IN_GRID)
 
 
@@ -384,7 +384,7 @@ def _index_late(i, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dir
     """Put particle i, which found the heads full, in the grid; returns the larger heads."""
     heads = more_heads(heads)
     insert(i, pts, nxt, dim, gi, gf, dirr, heads)
-    mark(i, pts, dim, size, gi, words, start, blocks, cells, field, gi[FIELD_CAP])
+    mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
     return heads
 
 
