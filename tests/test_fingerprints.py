@@ -20,13 +20,13 @@ approximation, longer jumps (``test_lattice.test_square_exit_is_where_brownian_m
 coarse cells (issue 25): longer jumps, the same law
 (``test_offlattice.test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound``).
 Every off-lattice fingerprint with jumps when the field near the cluster became the
-centre field (``offlattice.cells.CCAP``) and the off-lattice grids grew by 2.0 instead of
+centre field (``offlattice.centres.CCAP``) and the off-lattice grids grew by 2.0 instead of
 1.3 (issue 25): longer jumps, the same law (the same test: 2D Rg -0.71 and Rg/Rmax -0.34
 standard errors from the recorded means, 3D -0.99 and -0.43).
 Those whose walkers go beyond the centre field's reach (``off-2d/30000/3``, ``off-3d/600/1``,
 ``off-3d/8000/3``, ``off-box/600/0``, ``off-box-launch/600/0`` and ``/1``) when the distance
 pyramid above it became the centre pyramid (Euclidean, from each cell's centre:
-``offlattice.cells._level_rows``; issue 25): longer jumps, the same law (the same test:
+``offlattice.centres._level_rows``; issue 25): longer jumps, the same law (the same test:
 2D Rg -1.62 and Rg/Rmax +0.30 standard errors, 3D -1.00 and +1.28).
 """
 

@@ -241,6 +241,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     nearest held cell of the level below;
     random clustered sets, at points near and far (where the pyramid bounds)."""
     from dlasweep.kernels.offlattice import cells as ol
+    from dlasweep.kernels.offlattice import centres
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0
@@ -263,20 +264,20 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
     unit = np.concatenate([np.floor(pts + e).astype(int) + off for e in images])
     unit = unit[((unit >= 0) & (unit < W)).all(1)]
-    top = ol.CENTRE_TOP[dim]
-    centre = naive.centre_distances(unit, dim, fw, fs, ol.CENTRE_UNITS[dim], top)
+    top = centres.CENTRE_TOP[dim]
+    centre = naive.centre_distances(unit, dim, fw, fs, centres.CENTRE_UNITS[dim], top)
     np.testing.assert_array_equal(naive.field_distances(field, dim, fw, top), centre)
-    assert ol.field_reach(ol.CCAP[dim - 2]) < ol.LINE_PAD  # a substrate's images are marked as far as it sees
+    assert centres.field_reach(centres.CCAP[dim - 2]) < ol.LINE_PAD  # a substrate's images are marked as far as it sees
     assert (centre < top).sum() > 500  # the test sees the field, not only its cap
     if not line:
         # each level above: the distance from each cell's centre to the nearest held cell of the level below
         pstart = ol.level_starts(gi, dim)
-        step, top = maps.PYRAMID_STEP[dim], ol.LEVEL_TOP[dim]
+        step, top = maps.PYRAMID_STEP[dim], centres.LEVEL_TOP[dim]
         for level in (1, 2):
             shift = ol.FS + step * level
             pw = (W + (1 << shift) - 1) >> shift
             held = np.unique(unit >> (shift - step), axis=0)
-            want = naive.centre_distances(held, dim, pw, 1 << step, ol.LEVEL_UNITS[dim] / (1 << step), top)
+            want = naive.centre_distances(held, dim, pw, 1 << step, centres.LEVEL_UNITS[dim] / (1 << step), top)
             got = naive.field_distances(field[pstart[level]:pstart[level + 1]], dim, pw, top)
             np.testing.assert_array_equal(got, want)
             assert (want < top).sum() > 20
@@ -311,9 +312,9 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
     seed-to-seed spread). The difference of two 16-seed means has a standard
     error of sqrt(2/16) spreads (about 1% for Rg, 2% for Rg/Rmax); asserted
     within 3.5 of them. Measured after: 2D Rg 97.848, 3D 25.855; 3D 25.714
-    (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``cells.FCAP``);
-    with the centre field (``cells.CCAP``): 2D Rg 96.923 (Rg/Rmax 0.5337),
-    3D 25.579 (0.5182); with the centre pyramid above it (``cells.FCAP``):
+    (Rg/Rmax 0.5195) once its field's cap went from 4 to 6 (``centres.FCAP``);
+    with the centre field (``centres.CCAP``): 2D Rg 96.923 (Rg/Rmax 0.5337),
+    3D 25.579 (0.5182); with the centre pyramid above it (``centres.FCAP``):
     2D 95.862 (0.5405), 3D 25.577 (0.5335).
 
     Single unit steps (``jumps=False``) are no reference here: steps of a

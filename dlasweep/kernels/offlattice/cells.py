@@ -20,38 +20,26 @@ A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
 field)`` that ``build_grid`` returns.
 """
 
-import math
-
 import numpy as np
 
 from ..._jit import borrow, inline, jit
 from .. import maps
 from ..model import GRID_GROWTH
+from .centres import (
+    CCAP,
+    CENTRE_OWN,
+    CENTRE_TOP,
+    CENTRE_UNITS,
+    FCAP,
+    FS,
+    _centre_lower,
+    _pyramid_lower,
+    centre_gap,
+    pyramid_dist,
+)
 
 LINE_PAD = 32
 """Periodic images are marked in the maps up to this distance (line seed)."""
-FS = maps.FIELD_SHIFT
-"""The centre field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
-FCAP = (16, 6)
-"""Cap of the centre pyramid's levels (their cells), 2D and 3D. A newly held cell of
-the level below costs (2 cap - 1)**dim updates, hence 3D's smaller cap.
-
-The levels hold Euclidean distances from their cells' centres, where the
-Chebyshev pyramid before them held whole cells between cells: the bound far from
-the cluster went from about 0.72 of the distance to about 0.9, and a walker's way
-in from the launch circle takes fewer jumps, a difference that grows with the
-cluster. Side by side (seed 1; 3D 1e5 seeds 1 and 2): 2D 1e6 4.94 s against 5.32
-(54.9 steps a particle against 61.4), 2D 1e7 64.37 against 74.80 (58.5 against
-72.3), 3D 1e5 2.30 against 2.34 (112.2 against 124.0), 3D 1e6 15.31 against 18.19
-(125.7 against 143.8)."""
-CCAP = (8, 4)
-"""Cap of the centre field (coarse cells), 2D and 3D: each particle lowers the
-(2 cap - 1)**dim cells about its own, 30 sites (3D 14) from their centres.
-Near the cluster the Chebyshev field it replaced bounded the distance by whole
-cells: with it, 207 steps a particle at 3D 1e5 and 79 at 2D 1e5, with the
-exact nearest distance in its place (a measurement, not a kernel) 115 and
-47, with this field 124 and 54. Caps measured (``GRID_GROWTH`` 2.0): 2D 1e6
-6, 8, 11: 6.25, 5.97, 6.33 s; 3D 1e5 3, 4, 6: 2.87, 2.72, 3.06 s."""
 CELL_SIDE = 4
 """Side of the cell list's cells (diameters). A side of 4 puts four times the area under a tile's 64
 heads: memory added by growth, 2D 1e7 37.8 -> 29.3 B/particle, 3D 3e5 53.4 -> 44.8, against a side
@@ -170,144 +158,6 @@ def more_heads(heads):
     return bigger
 
 
-def field_reach(cap):
-    """Sites from a coarse cell's centre within which the centre field sees
-    every particle: a particle ``cap`` cells away or more lies this far."""
-    return ((cap - 1) << FS) + (1 << (FS - 1))
-
-
-def _centre_rows(dim):
-    """The centre field's values about a particle (``_centre_lower``), by the
-    place of its unit cell in its coarse cell, row after row of coarse cells.
-
-    A coarse cell ``d`` cells along an axis from the particle's, whose unit cell
-    lies ``s`` sites into its own, has its centre ``max((d << FS) + h - 1 - s,
-    s - (d << FS) - h, 0)`` whole sites (h half a coarse cell) beyond that unit
-    cell's faces; the value is the distance in ``CENTRE_UNITS`` a site, rounded
-    down (``int(sqrt(...))`` of a whole number: exact where it is a square and
-    otherwise far from one), capped, stored as ``CENTRE_TOP - distance``.
-    """
-    cap = CCAP[dim - 2]
-    units = 255 // field_reach(cap)
-    top = units * field_reach(cap)
-    side, span, h = 1 << FS, 2 * cap - 1, 1 << (FS - 1)
-    d = np.arange(-(cap - 1), cap)
-    gaps = np.stack([np.maximum(np.maximum((d << FS) + h - 1 - s, s - (d << FS) - h), 0) for s in range(side)])
-    rows = np.zeros((side,) * dim + (span,) * dim, np.uint8)
-    for sub in np.ndindex(*(side,) * dim):
-        n = sum(np.ix_(*[gaps[s] ** 2 for s in sub[::-1]]))  # axes (z,) y, x: a row runs along x
-        q = np.minimum(np.sqrt(units * units * n.astype(float)).astype(np.int64), top)
-        rows[sub[::-1]] = top - q
-    return units, top, rows.reshape(-1)
-
-
-_units2, _top2, CENTRE_ROWS_2D = _centre_rows(2)
-_units3, _top3, CENTRE_ROWS_3D = _centre_rows(3)
-_STEP = maps.PYRAMID_STEP
-
-
-def _level_rows(dim):
-    """The centre pyramid's values about a newly held cell of the level below
-    (``_pyramid_lower``), by its place in its cell of the level, row after row
-    of the level's cells: the distance from each cell's centre to the held cell
-    (a box), in ``LEVEL_UNITS`` a level cell, rounded down, capped at ``FCAP``
-    cells, stored as ``LEVEL_TOP - distance``. The gaps are whole in halves of
-    a held cell, so the rounding is exact (an integer square root)."""
-    cap = FCAP[dim - 2]
-    sub = 1 << _STEP[dim]
-    units = int(255 // (cap - 0.5))
-    top = int(units * (cap - 0.5))
-    span = 2 * cap - 1
-    # in halves of a held cell: the level cells' centres from the low corner of the box's level cell
-    centre = 2 * sub * np.arange(-(cap - 1), cap) + sub
-    gaps = np.stack([np.maximum(np.maximum(2 * s - centre, centre - 2 * (s + 1)), 0) for s in range(sub)])
-    rows = np.zeros((sub,) * dim + (span,) * dim, np.uint8)
-    for place in np.ndindex(*(sub,) * dim):
-        n = sum(np.ix_(*[gaps[s] ** 2 for s in place[::-1]]))
-        q = np.minimum([math.isqrt(v) for v in (units * units * n.reshape(-1) // (4 * sub * sub)).tolist()], top)
-        rows[place[::-1]] = top - q.reshape(n.shape)
-    return units, top, rows.reshape(-1)
-
-
-_lunits2, _ltop2, LEVEL_ROWS_2D = _level_rows(2)
-_lunits3, _ltop3, LEVEL_ROWS_3D = _level_rows(3)
-LEVEL_UNITS = (0, 0, _lunits2, _lunits3)
-"""By dimension: the centre pyramid's units a level cell."""
-LEVEL_TOP = (0, 0, _ltop2, _ltop3)
-"""By dimension: the centre pyramid's cap, in its units (a stored zero)."""
-LEVEL_HELD = (0, 0, _ltop2 - _lunits2 // 2 + 1, _ltop3 - _lunits3 // 2 + 1)
-"""By dimension: above this stored value a level cell holds a held cell of the level below
-(its centre lies within half a cell of it; a box outside lies half a cell away or more)."""
-CENTRE_UNITS = (0, 0, _units2, _units3)
-"""By dimension: the centre field's units a site, as fine as a byte holds up to ``field_reach``."""
-CENTRE_TOP = (0, 0, _top2, _top3)
-"""By dimension: the centre field's cap, in its units (a stored zero)."""
-
-
-@borrow
-def _lower_rows(field, dim, fw, rows, cap, shift, i, j, k):
-    """Lower a field of ``fw`` cells a side about cell (i, j, k) of the grid
-    ``2**shift`` times finer: each cell within ``cap - 1`` takes the maximum of
-    its value and the row table's (``rows``, by the place of (i, j, k) in its
-    cell). Each row is a stretch of the table taken by a branch-free maximum
-    the compiler vectorises, a tile's stretch at a time."""
-    reach, span = cap - 1, 2 * cap - 1
-    m = (1 << shift) - 1
-    last = (1 << maps.FIELD_TILE[dim]) - 1
-    ci, cj, ck = i >> shift, j >> shift, k >> shift
-    sub = ((((k & m) << shift) if dim == 3 else 0) + (j & m)) * (m + 1) + (i & m)  # the place's table
-    klo, khi = (max(ck - reach, 0), min(ck + reach, fw - 1)) if dim == 3 else (0, 0)
-    alo, ahi = max(ci - reach, 0), min(ci + reach, fw - 1)
-    for c in range(klo, khi + 1):
-        for b in range(max(cj - reach, 0), min(cj + reach, fw - 1) + 1):
-            row = sub * span + c - ck + reach if dim == 3 else sub
-            row = (row * span + b - cj + reach) * span + reach - ci
-            a = alo
-            while a <= ahi:
-                end = min(ahi, a | last)
-                base = maps.field_cell(dim, fw, a, b, c) - a
-                for x in range(a, end + 1):
-                    field[base + x] = max(field[base + x], rows[row + x])
-                a = end + 1
-
-
-@borrow
-def _centre_lower(field, dim, fw, i, j, k):
-    """Lower the centre field about a particle in unit cell (i, j, k) of the maps.
-
-    Each coarse cell within ``CCAP - 1`` of the particle's holds the distance from
-    its centre to the nearest particle's unit cell, rounded down and capped
-    (``_centre_rows``), so that zero is the cap and an unwritten page costs no
-    memory.
-    """
-    _lower_rows(field, dim, fw, CENTRE_ROWS_2D if dim == 2 else CENTRE_ROWS_3D, CCAP[dim - 2], FS, i, j, k)
-
-
-@borrow
-def _pyramid_lower(field, dim, W, i, j, k, levels):
-    """Record a newly held coarse cell, that of unit cell (i, j, k), in the
-    centre pyramid's levels 1 to ``levels - 1``: each level's cells within
-    ``FCAP - 1`` take the distance from their centres to the held cell of the
-    level below (``_level_rows``), up to the first level whose cell held one
-    already. Returns that level, -1 when none did."""
-    base = 0
-    step = _STEP[dim]
-    for level in range(levels):
-        shift = FS + step * level
-        fw = (W + (1 << shift) - 1) >> shift
-        size = maps.field_size(dim, fw)
-        if level > 0:
-            bi, bj, bk = i >> (shift - step), j >> (shift - step), (k >> (shift - step) if dim == 3 else 0)
-            here = base + maps.field_cell(dim, fw, bi >> step, bj >> step, bk >> step)
-            held = np.int64(field[here]) > LEVEL_HELD[dim]
-            _lower_rows(field[base:base + size], dim, fw, LEVEL_ROWS_2D if dim == 2 else LEVEL_ROWS_3D,
-                        FCAP[dim - 2], step, bi, bj, bk)
-            if held:
-                return level
-        base += size
-    return -1
-
-
 @borrow
 def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
     """Mark particle i in the maps, the centre field and the centre pyramid above
@@ -316,16 +166,13 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
     reach = 1 if gi[PERIODIC] == 1 else 0
     reach2 = reach if dim == 3 else 0
     fw = (W + (1 << FS) - 1) >> FS
-    # a particle in the coarse cell itself is at most sqrt(dim) from its centre
-    # (whole sites: a particle in any other cell, 2 or more)
-    own = CENTRE_TOP[dim] - int(np.sqrt(float(CENTRE_UNITS[dim] ** 2 * dim)))
     for a in range(-reach, reach + 1):
         for b in range(-reach2, reach2 + 1):
             i0 = int(np.floor(pts[i, 0] + a * size)) + gi[MAP_OFFSET]
             i1 = int(np.floor(pts[i, 1] + (b * size if dim == 3 else 0.0))) + gi[MAP_OFFSET + 1]
             i2 = int(np.floor(pts[i, 2])) + gi[MAP_OFFSET + 2] if dim == 3 else 0
             if 0 <= i0 < W and 0 <= i1 < W and 0 <= i2 < W:
-                held = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)]) >= own
+                held = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)]) >= CENTRE_OWN[dim]
                 _centre_lower(field, dim, fw, i0, i1, i2)
                 # a coarse cell (a pyramid level's) that already held a particle has that
                 # particle's coarser levels marked: only the finer ones are left
@@ -401,16 +248,6 @@ def face_gap(X0, X1, X2, dim, s):
     return f
 
 
-@jit
-def centre_gap(X0, X1, X2, dim):
-    """Distance from the grid point X to the centre of its coarse cell (side ``2**FS``)."""
-    h = float(1 << (FS - 1))
-    d0 = X0 - float((int(X0) >> FS) << FS) - h
-    d1 = X1 - float((int(X1) >> FS) << FS) - h
-    d2 = X2 - float((int(X2) >> FS) << FS) - h if dim == 3 else 0.0
-    return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-
-
 NEAR = 2.0
 """Where the centre field bounds no more than this, the level-1 map decides:
 clear, every centre lies 2 or more away; set, the walker takes the neighbour list."""
@@ -446,7 +283,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     i0, i1, i2 = int(X0), int(X1), int(X2)
     fw = (W + (1 << FS) - 1) >> FS
     e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-    dm = (CENTRE_TOP[dim] - e) * (1.0 / CENTRE_UNITS[dim]) - centre_gap(X0, X1, X2, dim)
+    dm = (CENTRE_TOP[dim] - e) * (1.0 / CENTRE_UNITS[dim]) - centre_gap(X0, X1, X2, dim, FS)
     if e > 0 and dm > NEAR:
         return dm
     if e == 0 and gi[PYRAMID_LEVELS] > 1:
@@ -498,28 +335,6 @@ def level_starts(gi, dim):
     return maps.pyramid_starts(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
 
 
-@borrow
-def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
-    """Lower bound on the centre distance from grid point X to every particle
-    from the centre pyramid's levels above the field, 0 when all are at their
-    cap: the first level below its cap puts every particle its value from the
-    centre of X's cell, less X's way to that centre."""
-    step = _STEP[dim]
-    for level in range(1, len(pstart) - 1):
-        shift = FS + step * level
-        fw = (int(W) + (1 << shift) - 1) >> shift
-        e = np.int64(field[pstart[level] + maps.field_cell(dim, fw, int(X0) >> shift, int(X1) >> shift,
-                                                           (int(X2) >> shift) if dim == 3 else 0)])
-        if e > 0:
-            side = float(1 << shift)
-            h = 0.5 * side
-            d0 = X0 - float((int(X0) >> shift) << shift) - h
-            d1 = X1 - float((int(X1) >> shift) << shift) - h
-            d2 = X2 - float((int(X2) >> shift) << shift) - h if dim == 3 else 0.0
-            return (LEVEL_TOP[dim] - e) * (side / LEVEL_UNITS[dim]) - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    return 0.0
-
-
 @jit
 def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, etop, unit, flo, ftop, pstart):
     """``map_dist`` as the walk's hot loop computes it: the grid's constants
@@ -551,7 +366,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
         e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-        dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim)
+        dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim, FS)
         lo, hi = 0, 0
         if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
             dm = 0.0

@@ -20,12 +20,10 @@ from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, 
 from .cells import (
     COVERED,
     FIELD_CAP,
-    FS,
     INF,
     NEAR,
     TILES_USED,
     build_grid,
-    centre_gap,
     face_gap,
     gather,
     insert,
@@ -34,9 +32,9 @@ from .cells import (
     mark,
     more_heads,
     no_grid,
-    pyramid_dist,
     walk_geometry,
 )
+from .centres import FS, centre_gap, pyramid_dist
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -216,7 +214,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
                     e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-                    dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim)
+                    dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim, FS)
                     lo, hi = 0, 0
                     if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
                         dm = 0.0
