@@ -191,7 +191,6 @@ def time_depth_pairs(points, times, edges):
     -------
     keys, counts : ndarray of int64
     """
-    bins = len(edges) - 1
     # a count per (time, bin) up to a time the cluster's size bounds; the rare longer times one by one
     dense = min(int(times.max()) + 1, max(1024, 4 * len(times)))
     table, tail = _time_depth_counts(points, times, np.asarray(edges, np.float64), dense)

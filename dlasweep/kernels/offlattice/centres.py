@@ -44,6 +44,7 @@ exact nearest distance in its place (a measurement, not a kernel) 115 and
 47, with this field 124 and 54. Caps measured (``GRID_GROWTH`` 2.0): 2D 1e6
 6, 8, 11: 6.25, 5.97, 6.33 s; 3D 1e5 3, 4, 6: 2.87, 2.72, 3.06 s."""
 
+
 def field_reach(cap):
     """Sites from a coarse cell's centre within which the centre field sees
     every particle: a particle ``cap`` cells away or more lies this far."""

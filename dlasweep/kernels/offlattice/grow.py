@@ -19,7 +19,6 @@ from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, 
 from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     COVERED,
-    FIELD_CAP,
     INF,
     NEAR,
     TILES_USED,
