@@ -241,7 +241,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     nearest held cell of the level below;
     random clustered sets, at points near and far (where the pyramid bounds)."""
     from dlasweep.kernels.offlattice import cells as ol
-    from dlasweep.kernels.offlattice import centres
+    from dlasweep.kernels import centres
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0

@@ -1,4 +1,4 @@
-"""Bit-packed occupancy grids, hierarchical maps and distance pyramids (Ossadnik).
+"""Bit-packed occupancy grids, hierarchical maps and distance fields (Ossadnik).
 
 A grid covers the cube ``[-off, W - off)^dim`` of unit cells. Segment 0 is a
 plain occupancy bit per cell; segment ``s >= 1`` is a *dilated* map of cells
@@ -10,11 +10,12 @@ Bits are packed 8x8 (2D) or 4x4x4 (3D) per 64-bit word, words in square
 tiles (``TILE_BITS``), and a grid's pages take memory only once written
 (``zeroed``): a 2D grid costs 1.3 bits per cell of the pages along the
 cluster (the lattice keeps segments 0 and 1 only), not of its bounding square.
-Near the cluster a coarse Chebyshev distance field (one byte per 4x4 cells)
-gives a sharper bound than the power-of-two maps; the distance pyramid
-(``pyramid_*``) stacks coarser fields above it, so that a walker far from the
-cluster reads a bound within a cell or two of the truth from a small array
-(beside periodic sides the off-lattice walk searches the maps instead).
+Near the cluster a coarse Chebyshev distance field (one byte per 4x4 cells,
+``field_lower``, ``field_fill``) gives a sharper bound than the power-of-two
+maps; the centre pyramid (``centres``) stacks coarser fields above it in the
+same array (``pyramid_starts``), so that a walker far from the cluster reads
+a bound from a small array (beside periodic sides the off-lattice walk
+searches the maps instead).
 """
 
 import sys
@@ -253,7 +254,7 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
 
 
 @jit
-def _fill(field, dim, fw, cap):
+def field_fill(field, dim, fw, cap):
     """Fill in the distances of a field of side ``fw`` cells from its zero
     cells (the rest at ``cap``), stored as ``field_lower`` stores them.
 
@@ -288,7 +289,7 @@ def _fill(field, dim, fw, cap):
 
 
 PYRAMID_STEP = (0, 0, 2, 1)
-"""By dimension: each level of the distance pyramid has cells ``2**PYRAMID_STEP``
+"""By dimension: each level of the pyramid above a field has cells ``2**PYRAMID_STEP``
 times wider than the level below; level 0 is the field (cells of
 ``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps."""
 
@@ -323,98 +324,3 @@ def pyramid_allocate(dim, width, cap, most=64):
     starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
     """
     return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)
-
-
-@borrow
-def pyramid_mark(pyramid, dim, width, i, j, k, cap, reach, most=64):
-    """Record a particle in cell (i, j, k) on every level: lower the distances
-    within ``reach`` (the cap, or 1 to mark only the particle's own cells for
-    ``pyramid_fill``). A level whose cell already holds a particle has every
-    coarser one marked too.
-
-    Returns the first level whose cell already held a particle, -1 when
-    none did. Each level's start is summed on the way (an
-    array of them, allocated at every particle, cost more than the marking).
-    """
-    levels = pyramid_levels(dim, width, cap, most)
-    base = 0
-    for level in range(levels):
-        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
-        fw = (width + (1 << shift) - 1) >> shift
-        size = field_size(dim, fw)
-        ci, cj, ck = i >> shift, j >> shift, (k >> shift if dim == 3 else 0)
-        if pyramid[base + field_cell(dim, fw, ci, cj, ck)] == cap:
-            return level
-        field_lower(pyramid[base:base + size], dim, fw, cap, reach, ci, cj, ck)
-        base += size
-    return -1
-
-
-@jit
-def pyramid_fill(pyramid, dim, width, cap, most=64):
-    """``_fill`` on the levels of the pyramid (of at most ``most``)."""
-    start = pyramid_starts(dim, width, cap, most)
-    for level in range(len(start) - 1):
-        shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
-        _fill(pyramid[start[level]:start[level + 1]], dim, (width + (1 << shift) - 1) >> shift, cap)
-
-
-@jit
-def pyramid_low(dim, cap):
-    """The smallest value of a level ``l >= 1`` that makes it the sharpest:
-    the level below is then at its cap, and bounds less."""
-    return (cap - 2) // (1 << PYRAMID_STEP[dim]) + 2
-
-
-@borrow
-def pyramid_find(pyramid, start, dim, width, i, j, k, cap, guess):
-    """The level of the pyramid that bounds the distance from cell (i, j, k)
-    best, and its value there, searched from level ``guess``.
-
-    A level's value v (cells, capped) puts every particle ``(v - 1) * side + 1``
-    sites or more away, Chebyshev. Values rise towards the finer levels, and
-    a level at ``pyramid_low`` of the cap of the level below or more bounds
-    at least as well as every finer one, so the answer is the coarsest level
-    at that or more (level 0 when none is). Walkers move
-    locally: from the previous answer the search takes a read or two, and
-    the coarse levels it reads for a walker far from the cluster are small
-    enough to stay in cache.
-
-    Returns
-    -------
-    level : int
-    value : int
-    """
-    top = len(start) - 2
-    low = pyramid_low(dim, cap)
-    level = min(guess, top)
-    value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
-    if value >= low:
-        while level < top:
-            up = _level_value(pyramid, start, dim, width, cap, level + 1, i, j, k)
-            if up < low:
-                break
-            level += 1
-            value = up
-    else:
-        while level > 0 and value < low:
-            level -= 1
-            value = _level_value(pyramid, start, dim, width, cap, level, i, j, k)
-    return level, value
-
-
-@jit
-def pyramid_bound(dim, level, value):
-    """The Chebyshev distance in sites that ``value`` (at least 1) at ``level``
-    guarantees from a cell to every particle: ``value - 1`` whole cells
-    between, plus one site. (Adding the walker's way to its own cell's face,
-    measured: 8% more steps a particle at 1e6 in 2D, not fewer.)"""
-    return ((value - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * level)) + 1
-
-
-@borrow
-def _level_value(pyramid, start, dim, width, cap, level, i, j, k):
-    shift = FIELD_SHIFT + PYRAMID_STEP[dim] * level
-    fw = (width + (1 << shift) - 1) >> shift
-    ck = k >> shift if dim == 3 else 0
-    return cap - np.int64(pyramid[start[level] + field_cell(dim, fw, i >> shift, j >> shift, ck)])

@@ -7,10 +7,11 @@ lattice walk first leaves the square (cube) of half-width ``d - 1`` around it
 (``exits``): no site inside touches the cluster, so this is exact, and every
 contact is still a lattice contact. Within two sites it takes single steps.
 ``d`` comes from the bit-packed occupancy words near the walker (``words``),
-else from the distance pyramid (``maps.pyramid_find``): coarse Chebyshev
-distance fields, each level's cells four (3D: two) times wider, so that a
-walker far from the cluster reads a bound within a cell or two of the truth
-from an array that stays in cache.
+else from a coarse Chebyshev distance field (cells of 4 sites, to 64 sites;
+3D 24). Beyond it the centre pyramid (``centres``: distances from the
+centres of cells four, 3D two, times wider at each level to the nearest held
+cell of the level below) bounds the Euclidean distance, from arrays that stay
+in cache.
 Far from the cluster (beyond the distances the tables cover) the walk is
 taken as Brownian at scales of ``CIRCLE_MIN`` sites and more: the walker
 jumps to where Brownian motion leaves the square (cube) free of particles
@@ -24,6 +25,7 @@ import numpy as np
 from ..._jit import borrow, cached, clock, jit
 from .. import maps
 from .. import model as codes
+from ..centres import pyramid_dist
 from ..model import GRID_GROWTH, STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
 from ..walk import (
     below,
@@ -242,32 +244,31 @@ def _release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
 
 
 @borrow
-def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0, cap, low, level, i, j, k):
-    """A lower bound of the Chebyshev distance from grid site (i, j, k) to
-    the cluster, or 0 when a particle may lie within two sites.
+def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0, cap, i, j, k):
+    """Lower bounds of the distance from grid site (i, j, k) to the cluster:
+    Chebyshev, 0 when a particle may lie within two sites, and Euclidean from
+    beyond the field's reach, 0 within it.
 
-    Exact within a few sites (the words: ``fine2``, ``fine3``), else the
-    bound of the pyramid's level that bounds best (``maps.pyramid_find``),
-    searched from ``level``, the walker's last; 5 off the grid. ``_grow``
+    The Chebyshev bound is exact within a few sites (the words: ``fine2``,
+    ``fine3``), else the coarse field's (whole cells of ``2**FIELD_SHIFT``
+    between), 5 off the grid; where the field is at its cap, the centre pyramid
+    above it bounds the Euclidean distance (``centres.pyramid_dist``). ``_grow``
     holds a copy of this body, spelled out. ``cube`` (27,) is working space.
 
     Returns
     -------
     d : int
-    level : int, where to search from at the walker's next step
+    far : float
     """
     d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
+    far = 0.0
     if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-        cell = low
-        if level == 0:
-            # the field, read here: most walkers are near the cluster, and the
-            # pyramid's search is a call
-            ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-            cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
-        if cell >= low:
-            level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, level)
-        if level > 0 or cell > 1:
-            d = maps.pyramid_bound(dim, level, cell)
+        ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+        cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+        if cell == cap and len(levels) > 2:
+            far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
+        if cell > 1:
+            d = ((cell - 1) << maps.FIELD_SHIFT) + 1
         else:
             cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
             if (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0):
@@ -283,7 +284,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
                 )
             else:
                 d = fine3(words, nb0, i, j, k, cube)
-    return d, level
+    return d, far
 
 
 @jit
@@ -354,10 +355,8 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     group = 8 if dim == 2 else 48  # symmetries of the square (cube)
     rounding = 0.5 * np.sqrt(dim)  # how far a site can be from the point it rounds
     cap = FIELD_CAP[dim]
-    low = maps.pyramid_low(dim, cap)
     levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
     fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT  # the field's side
-    level = 0  # the pyramid's level that bounded the walker's distance last
     nb0, base1, nb1 = blocks[0], start[1], blocks[1]
     nm = moves.shape[0]
     cube = np.zeros(27, np.uint64)
@@ -441,17 +440,14 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
             # >>> _distance_bound, spelled out: called, it made the 1e6 growth 44% slower
             # and 35% inlined (reference counting of its arrays at every step)
             d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
+            far = 0.0
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-                cell = low
-                if level == 0:
-                    # the field, read here: most walkers are near the cluster, and the
-                    # pyramid's search is a call
-                    ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
-                if cell >= low:
-                    level, cell = maps.pyramid_find(field, levels, dim, width, i, j, k, cap, level)
-                if level > 0 or cell > 1:
-                    d = maps.pyramid_bound(dim, level, cell)
+                ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+                cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+                if cell == cap and len(levels) > 2:
+                    far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
+                if cell > 1:
+                    d = ((cell - 1) << maps.FIELD_SHIFT) + 1
                 else:
                     cw, cb = maps.index(dim, base1, nb1, i >> 1, j >> 1, k >> 1)
                     if (words[cw] >> np.uint64(cb)) & np.uint64(1) != np.uint64(0):
@@ -514,7 +510,7 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
                 d = min(max(d, np.int64(free)), period, q[up] + 1)
                 free = min(free, pos[up] + 1.0)
             square = d - rounding - JUMP_MARGIN  # half-width of the square (cube) free of particles
-            reach = max(free - JUMP_MARGIN, square)
+            reach = max(free - JUMP_MARGIN, square, far - rounding - JUMP_MARGIN)
             half = min(d - 1, top)
             if kill:
                 reach = min(reach, kill_r - r)

@@ -2,8 +2,9 @@
 exact Chebyshev distances a few sites out from whole 64-bit words.
 
 The grid is ``maps``' (segment 0 a bit per site, 8x8 or 4x4x4 sites per
-word, then dilated level 1, which tells a walker within two sites) with the
-distance pyramid beside it (``maps.pyramid_*``); a
+word, then dilated level 1, which tells a walker within two sites) with a
+coarse Chebyshev distance field beside it (``maps.field_lower``), and above
+the field the centre pyramid (``centres.pyramid_lower``) in the same array; a
 site q of the lattice is cell q + ``off`` of the grid, whose side is
 ``width``. A substrate's periodic images are marked too.
 """
@@ -12,6 +13,7 @@ import numpy as np
 
 from ..._jit import jit
 from .. import maps
+from ..centres import pyramid_lower
 
 FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, in cells of 4 sites
 
@@ -20,9 +22,12 @@ FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, i
 def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
     """Mark a particle at site q, with its periodic images for substrates.
 
-    ``cap`` 1 marks only the particle's own cells of the distance pyramid
-    (for ``maps.pyramid_fill`` to complete), else ``FIELD_CAP[dim]``.
+    ``cap`` 1 marks only the particle's own cell of the distance field (for
+    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``. A coarse cell
+    newly held is recorded in the centre pyramid above the field.
     """
+    fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
+    levels = maps.pyramid_levels(dim, width, FIELD_CAP[dim])
     reach = 1 if period > 0 else 0
     zreach = reach if dim == 3 else 0
     for a in range(-reach, reach + 1):
@@ -32,7 +37,12 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
             k = q[2] + off
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
                 maps.mark(words, dim, start, blocks, cells, i, j, k)
-                maps.pyramid_mark(field, dim, width, i, j, k, FIELD_CAP[dim], cap)
+                s = maps.FIELD_SHIFT
+                ci, cj, ck = i >> s, j >> s, (k >> s if dim == 3 else 0)
+                # a held cell has its distances marked already
+                if field[maps.field_cell(dim, fw, ci, cj, ck)] != FIELD_CAP[dim]:
+                    pyramid_lower(field, dim, width, i, j, k, levels)
+                    maps.field_lower(field, dim, fw, FIELD_CAP[dim], cap, ci, cj, ck)
 
 
 @jit
@@ -44,7 +54,8 @@ def rebuild(points, count, dim, width, off, period):
         for a in range(dim):
             q[a] = points[p, a]
         mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
-    maps.pyramid_fill(field, dim, width, FIELD_CAP[dim])
+    fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
+    maps.field_fill(field, dim, fw, FIELD_CAP[dim])
     return words, start, blocks, cells, field
 
 

@@ -4,8 +4,6 @@ Two particles touch when their centres are exactly one diameter apart.
 
 - ``cells``: the cell list and the hierarchical maps, which bound the free
   distance of a walker from below;
-- ``centres``: the centre field and the centre pyramid, distances from cells'
-  centres that bound it from below further out;
 - ``contact``: the exact ray cast to contact, the Gaussian steps and the
   rebound of a walker that did not stick;
 - ``grow``: the walk from release to contact, attachment, the lockstep

@@ -7,7 +7,7 @@ unit-cell occupancy is never needed off-lattice), a centre field (a byte per
 coarse cell of side ``2**FS``: the distance from its centre to the nearest
 particle's unit cell, to ``CCAP`` cells, ``_centre_lower``) and the centre
 pyramid above it (each level's cell holds the distance from its centre to the
-nearest held cell of the level below, to ``FCAP`` cells, ``_pyramid_lower``)
+nearest held cell of the level below, to ``FCAP`` cells, ``centres.pyramid_lower``)
 bound the distance to the nearest particle from below (``map_dist``). The
 centre field is the pyramid's level 0, in the same array (``maps.pyramid_starts``'
 layout).
@@ -25,7 +25,7 @@ import numpy as np
 from ..._jit import borrow, inline, jit
 from .. import maps
 from ..model import GRID_GROWTH
-from .centres import (
+from ..centres import (
     CCAP,
     CENTRE_OWN,
     CENTRE_TOP,
@@ -33,9 +33,9 @@ from .centres import (
     FCAP,
     FS,
     _centre_lower,
-    _pyramid_lower,
     centre_gap,
     pyramid_dist,
+    pyramid_lower,
 )
 
 LINE_PAD = 32
@@ -64,7 +64,7 @@ TILES_USED = 14  # cell-list tiles allocated
 TOP_LEVEL = 15  # largest usable map level
 COVERED = 16  # half-width (point seeds) or height (substrate) the grid covers
 FIELD_CAP = 17  # the distance field's cap, in coarse cells
-PYRAMID_LEVELS = 18  # most levels of the distance pyramid
+PYRAMID_LEVELS = 18  # most levels of the centre pyramid
 GI_SLOTS = 19
 # Slots of gf, the grid's float geometry.
 ORIGIN = 0  # 0-2: the cell list's origin per axis
@@ -179,7 +179,7 @@ def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
                 top = min(len(cells), FS)
                 if not held:
                     levels = maps.pyramid_levels(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS])
-                    level = _pyramid_lower(field, dim, W, i0, i1, i2, levels)
+                    level = pyramid_lower(field, dim, W, i0, i1, i2, levels)
                     top = len(cells) if level < 0 else min(len(cells), FS + maps.PYRAMID_STEP[dim] * level)
                 _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
 
@@ -264,7 +264,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     the largest clear map level s puts every particle outside the 3**dim block
     of level-s cells around w: 2**s plus w's distance to its level-s cell's
     faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
-    map. At the field's cap, away from periodic sides, the distance pyramid
+    map. At the field's cap, away from periodic sides, the centre pyramid
     above the field bounds instead of the maps (``pyramid_dist``). (``_walk``
     spells this out inline.)
     """

@@ -33,7 +33,7 @@ from .cells import (
     no_grid,
     walk_geometry,
 )
-from .centres import FS, centre_gap, pyramid_dist
+from ..centres import FS, centre_gap, pyramid_dist
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -103,7 +103,7 @@ def _walk(model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor
     rs : uint64 (4,)
         The xoshiro256+ stream; ``rng`` the numpy Generator.
     The rest: scratch arrays, the neighbour lists and the grid (``cells``),
-    ``pstart`` the distance pyramid's level starts (``cells.level_starts``);
+    ``pstart`` the centre pyramid's level starts (``cells.level_starts``);
     ``geo`` holds r_max, the Chebyshev extent and h_max.
 
     Returns

@@ -1,13 +1,15 @@
 """The centre field and the centre pyramid: distances from cells' centres to
 the nearest particle, which bound a walker's distance to the cluster from
-below (``cells.map_dist``).
+below (``offlattice.cells.map_dist``, ``lattice.grow._distance_bound``).
 
-Level 0, the centre field, holds a byte per coarse cell of side ``2**FS``: the
-distance from its centre to the nearest particle's unit cell, to ``CCAP``
-cells (``_centre_lower``, at every particle). Each level above, cells
+Level 0 is the kernel's own field. Off-lattice it is the centre field, a
+byte per coarse cell of side ``2**FS``: the distance from its centre to the
+nearest particle's unit cell, to ``CCAP`` cells (``_centre_lower``, at every
+particle); the lattice keeps a Chebyshev field there (``lattice.words``).
+A coarse cell is held when a particle lies in it. Each level above, cells
 ``2**PYRAMID_STEP`` times wider, holds the distance from its cells' centres to
 the nearest held cell of the level below, to ``FCAP`` cells
-(``_pyramid_lower``, where a cell below is newly held). Less a walker's way to
+(``pyramid_lower``, where a cell below is newly held). Less a walker's way to
 the centre of its cell (``centre_gap``), each bounds its distance
 (``pyramid_dist`` above the field). Values are stored as the cap less the
 distance, so that an unwritten page means the cap and costs no memory; the
@@ -18,8 +20,8 @@ import math
 
 import numpy as np
 
-from ..._jit import borrow, jit
-from .. import maps
+from .._jit import borrow, jit
+from . import maps
 
 FS = maps.FIELD_SHIFT
 """The centre field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
@@ -83,7 +85,7 @@ _STEP = maps.PYRAMID_STEP
 
 def _level_rows(dim):
     """The centre pyramid's values about a newly held cell of the level below
-    (``_pyramid_lower``), by its place in its cell of the level, row after row
+    (``pyramid_lower``), by its place in its cell of the level, row after row
     of the level's cells: the distance from each cell's centre to the held cell
     (a box), in ``LEVEL_UNITS`` a level cell, rounded down, capped at ``FCAP``
     cells, stored as ``LEVEL_TOP - distance``. The gaps are whole in halves of
@@ -163,7 +165,7 @@ def _centre_lower(field, dim, fw, i, j, k):
 
 
 @borrow
-def _pyramid_lower(field, dim, W, i, j, k, levels):
+def pyramid_lower(field, dim, W, i, j, k, levels):
     """Record a newly held coarse cell, that of unit cell (i, j, k), in the
     centre pyramid's levels 1 to ``levels - 1``: each level's cells within
     ``FCAP - 1`` take the distance from their centres to the held cell of the
