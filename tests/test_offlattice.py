@@ -366,3 +366,43 @@ def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     heads = grow._index_late(n, pts, nxt, 2, 0, gi, gf, words, start, blocks, cellz, dirr, heads, field)
     grid = gi, gf, words, start, blocks, cellz, dirr, heads, field
     assert _found(pts, nxt, n, grid) and all(_found(pts, nxt, i, grid) for i in range(0, n, 7))
+
+
+@pytest.mark.parametrize("case", ["2d", "3d", "block", "block-3d", "box"])
+def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case):
+    """``cells.regrow_grid`` (the centre field copied from the outgrown grid, the
+    pyramid and maps marked once per coarse cell) gives every array of
+    ``build_grid``'s grid, built from nothing for the same particles: a grown
+    cluster's first m particles in a grid, the (m+1)-th outside it, as when
+    growth outgrows a grid. The old field's whole pages go back to the OS: they read zeros."""
+    from dlasweep.kernels.offlattice import cells
+
+    params = VARIANTS[case]
+    dim = params.get("dim", 2)
+    size = params.get("size", 0)
+    pts = dla.grow(6000 if dim == 2 else 4000, seed=3, **OFF, **params).points
+    extent = np.abs(pts).max(1)
+    kept = rebuilds = 0
+    for first in (20, 40, 200, 900):  # small grids, most particles near an edge, and larger ones
+        if first >= len(pts):  # a box stops its cluster early
+            break
+        nxt = np.full(len(pts), -1, np.int32)
+        old = cells.build_grid(dim, False, size, extent[:first].max(), pts, first, nxt, 0)
+        beyond = extent + 8.0 > old[0][cells.COVERED]
+        if not beyond.any():
+            continue
+        m = int(np.argmax(beyond))  # the first particle beyond the old grid
+        rebuilds += 1
+        old = cells.build_grid(dim, False, size, extent[:first].max(), pts, m, nxt.copy(), 0)
+        tiles = old[0][cells.TILES_USED]
+        fresh = cells.build_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles)
+        carried = cells.regrow_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles,
+                                    old[0], old[8])
+        for name, a, b in zip(("gi", "gf", "words", "start", "blocks", "cells", "dirr", "heads", "field"), fresh,
+                              carried):
+            np.testing.assert_array_equal(a, b, err_msg=name)
+        address = old[8].ctypes.data
+        lo, hi = -address % maps.PAGE, (address + old[8].nbytes) // maps.PAGE * maps.PAGE - address
+        assert hi <= lo or not old[8][lo:hi].any()  # its whole pages handed back (they read zeros)
+        kept += np.count_nonzero(carried[8])
+    assert rebuilds >= 2 and kept > 500

@@ -115,6 +115,15 @@ def zeroed(n, dtype):
     return a
 
 
+@borrow
+def release(a, lo, hi):
+    """Hand the whole pages of the bytes ``lo`` to ``hi`` of the byte array ``a`` back to
+    the OS (they read as zeros after); returns where the released pages end, ``lo``
+    when none was whole, so that a caller releasing stretch after stretch passes it on."""
+    rlo, rhi = _release_pages(np.uintp(a.ctypes.data) + np.uintp(lo), np.uintp(hi - lo))
+    return lo + np.int64(rhi) if rhi > rlo else lo
+
+
 @jit
 def layout(dim, width, most=64):
     """Start word, blocks per axis and cells per axis of every segment (at most ``most``),

@@ -68,8 +68,11 @@ the parents (4) and the cell-list links (4), the grids take about a bit per unit
 extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk
 loop's next pass: numba frees an array held across a loop's passes only
-when the pass ends, so building them in the same pass held both. (With
-walkers > 1 both are still held during a rebuild: the box bounds them.)
+when the pass ends, so building them in the same pass held both. The
+centre field alone is kept until the new grid has copied it
+(``cells.regrow_grid``: no particle lowers its cells again but those near
+the old grid's edge), its pages handed back to the OS as they are copied.
+(With walkers > 1 both are still held during a rebuild: the box bounds them.)
 
 Speed note: numba counts the references of the arrays a function hands on,
 with atomic increments and decrements; perf found them taking 42% of a 2D

@@ -31,6 +31,7 @@ from .cells import (
     mark,
     more_heads,
     no_grid,
+    regrow_grid,
     walk_geometry,
 )
 from ..centres import FS, centre_gap, pyramid_dist
@@ -431,6 +432,7 @@ def _grow(n, model, marks, rng, times):
     gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
         dim, line, size, max(geo[2], 0.0) if line else geo[1], pts, count, nxt, 0)
     pstart = level_starts(gi, dim)
+    old_gi, old_field = gi, field  # the grid's field, carried over when it is outgrown
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
     if model.walkers > 1:
@@ -454,8 +456,9 @@ def _grow(n, model, marks, rng, times):
         if regrid >= 0:
             # Built here, not where the old grid was outgrown: numba frees an array
             # held across a loop's passes only when the pass ends (as in the lattice kernel).
-            gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
-                dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid)
+            gi, gf, words, start, blocks, cells, dirr, heads, field = regrow_grid(
+                dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid, old_gi, old_field)
+            old_gi, old_field = gi, field
             pstart = level_starts(gi, dim)
             regrid = -1
         launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
@@ -476,7 +479,7 @@ def _grow(n, model, marks, rng, times):
                                words, start, blocks, cells, dirr, heads, field)
         if tiles == HEADS_FULL:
             heads = _index_late(count - 1, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr, heads, field)
-        elif tiles >= 0:  # dropped now (every name of it), the larger one built at the top of the next pass
+        elif tiles >= 0:  # dropped now (every name but the field's), the larger one built at the next pass's top
             gi, gf, words, start, blocks, cells, dirr, heads, field = no_grid()
             regrid = tiles
         pending = 0
@@ -567,9 +570,10 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, steps, parents, 
                     heads = _index_late(count - 1, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr,
                                         heads, field)
                 elif tiles >= 0:
+                    old_gi, old_field = gi, field
                     gi, gf, words, start, blocks, cells, dirr, heads, field = no_grid()
-                    gi, gf, words, start, blocks, cells, dirr, heads, field = build_grid(
-                        dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles)
+                    gi, gf, words, start, blocks, cells, dirr, heads, field = regrow_grid(
+                        dim, line, size, geo[2] if line else geo[1], pts, count, nxt, tiles, old_gi, old_field)
                 pending = 0
                 alive[k] = False
                 live -= 1
