@@ -245,7 +245,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0
-    n = 600 if dim == 2 else 1500
+    n = 600 if dim == 2 else 800
     hub = rng.uniform(0, size, (6, dim)) if line else rng.normal(0, 25, (6, dim))
     pts = hub[rng.integers(0, 6, n)] + rng.normal(0, 6, (n, dim))
     if line:
