@@ -131,7 +131,8 @@ def _lower_rows(field, dim, fw, rows, cap, shift, i, j, k):
     ``2**shift`` times finer: each cell within ``cap - 1`` takes the maximum of
     its value and the row table's (``rows``, by the place of (i, j, k) in its
     cell). Each row is a stretch of the table taken by a branch-free maximum
-    the compiler vectorises, a tile's stretch at a time."""
+    the compiler vectorises (unsigned indices, as in ``maps.field_lower``), a
+    tile's stretch at a time."""
     reach, span = cap - 1, 2 * cap - 1
     m = (1 << shift) - 1
     last = (1 << maps.FIELD_TILE[dim]) - 1
@@ -146,9 +147,9 @@ def _lower_rows(field, dim, fw, rows, cap, shift, i, j, k):
             a = alo
             while a <= ahi:
                 end = min(ahi, a | last)
-                base = maps.field_cell(dim, fw, a, b, c) - a
-                for x in range(a, end + 1):
-                    field[base + x] = max(field[base + x], rows[row + x])
+                fb, rb = np.uint64(maps.field_cell(dim, fw, a, b, c)), np.uint64(row + a)
+                for x in range(np.uint64(end + 1 - a)):
+                    field[fb + x] = max(field[fb + x], rows[rb + x])
                 a = end + 1
 
 

@@ -243,7 +243,9 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
     Each row is taken a tile's stretch at a time, whose cells lie side by
     side, by a branch-free maximum the compiler vectorises: rings about the
     cell that stop where nothing drops marked a 2D off-lattice cluster of
-    1e6 in 0.78 s, these rows in 0.57.
+    1e6 in 0.78 s, these rows in 0.57. The indices are unsigned: numba wraps
+    a negative signed index around, and that branch kept LLVM from
+    vectorising the rows (a row of 31 cells: 51 ns scalar, 11 vectorised).
     """
     reach -= 1
     last = (1 << FIELD_TILE[dim]) - 1
@@ -256,9 +258,10 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
             a = alo
             while a <= ahi:
                 end = min(ahi, a | last)
-                base = field_cell(dim, fw, a, b, c) - a
-                for x in range(a, end + 1):
-                    field[base + x] = max(field[base + x], np.uint8(cap - max(dj, abs(x - ci))))
+                fb = np.uint64(field_cell(dim, fw, a, b, c))
+                for x in range(end + 1 - a):
+                    u = np.uint64(x)
+                    field[fb + u] = max(field[fb + u], np.uint8(cap - max(dj, abs(x + a - ci))))
                 a = end + 1
 
 
