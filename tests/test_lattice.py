@@ -238,12 +238,45 @@ def test_the_field_holds_capped_cell_distances(dim, width, fill):
     for density in (0.00002, 0.0003, 0.003):
         pts = _random_points(rng, dim, width, density)
         field = maps.zeroed(maps.field_size(dim, fw), np.uint8)
+        held = np.zeros(maps.field_tile(dim, fw, fw - 1, fw - 1, fw - 1) + 1, np.uint8)
         for p in pts:
-            maps.field_lower(field, dim, fw, cap, cap if fill == "mark" else 1, *[x >> shift for x in p])
+            cell = [x >> shift for x in p]
+            maps.field_lower(field, dim, fw, cap, cap if fill == "mark" else 1, *cell)
+            held[maps.field_tile(dim, fw, *cell)] = 1
         if fill == "fill":
-            maps.field_fill(field, dim, fw, cap)
+            maps.field_fill(field, dim, fw, cap, held)
         got = naive.field_distances(field, dim, fw, cap)
         assert (got == _level_distances(pts, dim, width, shift, cap)).all()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_filled_field_skips_only_tiles_beyond_reach(dim):
+    """On a grid of 6 tiles a side whose particles lie in a corner, along one
+    edge and alone near the corner of an inner tile (``field_fill`` visits only
+    the tiles beside a held one), the filled field equals the one marked
+    particle by particle."""
+    rng = np.random.default_rng(9)
+    cap, shift = FIELD_CAP[dim], maps.FIELD_SHIFT
+    tile = 1 << (maps.FIELD_TILE[dim] + shift)  # sites
+    width = 6 * tile
+    fw = (width + (1 << shift) - 1) >> shift
+    corner = rng.integers(0, tile + tile // 4, (200, dim))  # across the first tile's edges
+    edge = np.column_stack([rng.integers(0, width, 40)] + [np.zeros(40, int)] * (dim - 1))
+    inner = np.full((1, dim), 4 * tile + 4)  # it alone reaches into the tiles before its own
+    fields = []
+    for reach in (cap, 1):
+        field = maps.zeroed(maps.field_size(dim, fw), np.uint8)
+        held = np.zeros(maps.field_tile(dim, fw, fw - 1, fw - 1, fw - 1) + 1, np.uint8)
+        for p in np.concatenate([corner, edge, inner]):
+            cell = [int(x) >> shift for x in p] + [0] * (3 - dim)
+            maps.field_lower(field, dim, fw, cap, reach, *cell)
+            held[maps.field_tile(dim, fw, *cell)] = 1
+        if reach == 1:
+            assert held.sum() < len(held) - 3 ** dim  # some tiles lie beyond every held one's reach
+            maps.field_fill(field, dim, fw, cap, held)
+        fields.append(naive.field_distances(field, dim, fw, cap))
+    assert (fields[0] == fields[1]).all()
+    assert (fields[0] < cap).sum() > 0
 
 
 @pytest.mark.parametrize("dim", [2, 3])

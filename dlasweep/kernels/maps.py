@@ -266,7 +266,15 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
 
 
 @jit
-def field_fill(field, dim, fw, cap):
+def field_tile(dim, fw, ci, cj, ck):
+    """The tile of cell (ci, cj, ck) in a field of ``fw`` cells a side (``field_fill``'s ``held``)."""
+    t = FIELD_TILE[dim]
+    n = (fw + (1 << t) - 1) >> t
+    return (ci >> t) + n * ((cj >> t) + (n * (ck >> t) if dim == 3 else 0))
+
+
+@jit
+def field_fill(field, dim, fw, cap, held):
     """Fill in the distances of a field of side ``fw`` cells from its zero
     cells (the rest at ``cap``), stored as ``field_lower`` stores them.
 
@@ -275,7 +283,25 @@ def field_fill(field, dim, fw, cap):
     a whole grid costs a few operations per cell instead of ``field_lower``'s
     ``(2 cap - 1)**dim`` per particle, so a rebuild uses this. Only cells
     within the cap are written.
+
+    ``held`` flags each tile (``field_tile``) that holds a zero-distance
+    cell. A distance reaches at most ``cap`` cells, less than a
+    tile, so the passes visit only the tiles beside a held one, in the same
+    order: a rebuild's grid is mostly empty (3D: 8.8% of a growth of 1e6 went
+    to filling it whole).
     """
+    t = FIELD_TILE[dim]
+    n = (fw + (1 << t) - 1) >> t
+    nzt = n if dim == 3 else 1
+    near = np.zeros(len(held), np.bool_)
+    for tz in range(nzt):
+        for ty in range(n):
+            for tx in range(n):
+                if held[tx + n * (ty + n * tz)]:
+                    for z in range(max(tz - 1, 0), min(tz + 1, nzt - 1) + 1):
+                        for y in range(max(ty - 1, 0), min(ty + 1, n - 1) + 1):
+                            for x in range(max(tx - 1, 0), min(tx + 1, n - 1) + 1):
+                                near[x + n * (y + n * z)] = True
     nz = fw if dim == 3 else 1
     for sweep in range(2):
         g = 1 - 2 * sweep  # +1 forward, -1 backward
@@ -283,21 +309,26 @@ def field_fill(field, dim, fw, cap):
             c = cc if g > 0 else nz - 1 - cc
             for bb in range(fw):
                 b = bb if g > 0 else fw - 1 - bb
-                for aa in range(fw):
-                    a = aa if g > 0 else fw - 1 - aa
-                    here = field_cell(dim, fw, a, b, c)
-                    u = np.int64(field[here])
-                    if u == cap:
+                for tt in range(n):
+                    tx = tt if g > 0 else n - 1 - tt
+                    if not near[tx + n * ((b >> t) + n * (c >> t))]:
                         continue
-                    # neighbours (dc, db, da) before this cell in the pass's order
-                    for dc in range(-1 if dim == 3 else 0, 1):
-                        for db in range(-1, 2 if dc < 0 else 1):
-                            for da in range(-1, 2 if dc < 0 or db < 0 else 0):
-                                n0, n1, n2 = a + g * da, b + g * db, c + g * dc
-                                if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
-                                    u = max(u, np.int64(field[field_cell(dim, fw, n0, n1, n2)]) - 1)
-                    if u > field[here]:
-                        field[here] = u
+                    lo, hi = tx << t, min(fw, (tx + 1) << t)
+                    for aa in range(lo, hi):
+                        a = aa if g > 0 else lo + hi - 1 - aa
+                        here = field_cell(dim, fw, a, b, c)
+                        u = np.int64(field[here])
+                        if u == cap:
+                            continue
+                        # neighbours (dc, db, da) before this cell in the pass's order
+                        for dc in range(-1 if dim == 3 else 0, 1):
+                            for db in range(-1, 2 if dc < 0 else 1):
+                                for da in range(-1, 2 if dc < 0 or db < 0 else 0):
+                                    n0, n1, n2 = a + g * da, b + g * db, c + g * dc
+                                    if 0 <= n0 < fw and 0 <= n1 < fw and 0 <= n2 < nz:
+                                        u = max(u, np.int64(field[field_cell(dim, fw, n0, n1, n2)]) - 1)
+                        if u > field[here]:
+                            field[here] = u
 
 
 PYRAMID_STEP = (0, 0, 2, 1)

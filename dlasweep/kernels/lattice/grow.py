@@ -204,7 +204,7 @@ def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
         if not line:
             off = width // 2
         return count, r_max, h_max, width, off, True
-    mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim])
+    mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim], field[:0])
     return count, r_max, h_max, width, off, False
 
 

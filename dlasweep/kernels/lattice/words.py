@@ -19,12 +19,13 @@ FIELD_CAP = (0, 0, 16, 6)  # by dimension: reach of the coarse distance field, i
 
 
 @jit
-def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap):
+def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap, held):
     """Mark a particle at site q, with its periodic images for substrates.
 
     ``cap`` 1 marks only the particle's own cell of the distance field (for
-    ``maps.field_fill`` to complete), else ``FIELD_CAP[dim]``. A coarse cell
-    newly held is recorded in the centre pyramid above the field.
+    ``maps.field_fill`` to complete, flagging its tiles in ``held``; growth
+    passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly held is recorded in the centre
+    pyramid above the field.
     """
     fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
     levels = maps.pyramid_levels(dim, width, FIELD_CAP[dim])
@@ -39,6 +40,8 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
                 maps.mark(words, dim, start, blocks, cells, i, j, k)
                 s = maps.FIELD_SHIFT
                 ci, cj, ck = i >> s, j >> s, (k >> s if dim == 3 else 0)
+                if len(held) > 0:
+                    held[maps.field_tile(dim, fw, ci, cj, ck)] = 1
                 # a held cell has its distances marked already
                 if field[maps.field_cell(dim, fw, ci, cj, ck)] != FIELD_CAP[dim]:
                     pyramid_lower(field, dim, width, i, j, k, levels)
@@ -50,12 +53,13 @@ def rebuild(points, count, dim, width, off, period):
     words, start, blocks, cells = maps.allocate(dim, width, 2)  # occupancy and level 1: the near test
     field = maps.pyramid_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
+    fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
+    held = np.zeros(maps.field_tile(dim, fw, fw - 1, fw - 1, fw - 1) + 1, np.uint8)
     for p in range(count):
         for a in range(dim):
             q[a] = points[p, a]
-        mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1)
-    fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
-    maps.field_fill(field, dim, fw, FIELD_CAP[dim])
+        mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1, held)
+    maps.field_fill(field, dim, fw, FIELD_CAP[dim], held)
     return words, start, blocks, cells, field
 
 
