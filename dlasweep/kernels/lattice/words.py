@@ -177,12 +177,18 @@ def fine3(words, nb, i, j, k, cube):
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
     inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
+    t = maps.TILE_BITS[3]
+    tm = (1 << t) - 1
+    # the 27 words within one tile (about 42% of the time): at fixed steps from the middle one
+    one_tile = inside and 0 < bx & tm < tm and 0 < by & tm < tm and 0 < bz & tm < tm
+    middle = np.uint64(maps.block_word(3, 0, nb, bx, by, bz) - 1 - (1 << t) - (1 << (2 * t))) if one_tile else np.uint64(0)
     any_set = np.uint64(0)
     for c in range(3):
         for b in range(3):
             for a in range(3):
-                # away from the grid's faces, no bounds to check
-                if inside:
+                if one_tile:
+                    w = words[middle + np.uint64(a + (b << t) + (c << (2 * t)))]
+                elif inside:  # away from the grid's faces, no bounds to check
                     w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
                 else:
                     w = word_at(words, 3, nb, bx + a - 1, by + b - 1, bz + c - 1)
