@@ -28,6 +28,7 @@ from numba.core.runtime import rtsys
 import dlasweep as dla
 params = json.loads(sys.argv[1])
 dla.grow(500, seed=1, **params)  # compiled and warmed
+gc.collect()  # a fresh compilation leaves arrays in garbage cycles: freed here, not below
 before = rtsys.get_allocation_stats()
 cluster = dla.grow(20000, seed=2, **params)
 del cluster
