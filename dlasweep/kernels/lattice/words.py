@@ -24,8 +24,8 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
 
     ``cap`` 1 marks only the particle's own cell of the distance field (for
     ``maps.field_fill`` to complete, flagging its tiles in ``held``; growth
-    passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly held is recorded in the centre
-    pyramid above the field.
+    passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly
+    held is recorded in the centre pyramid above the field.
     """
     fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
     levels = maps.pyramid_levels(dim, width, FIELD_CAP[dim])
@@ -179,15 +179,17 @@ def fine3(words, nb, i, j, k, cube):
     inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
     t = maps.TILE_BITS[3]
     tm = (1 << t) - 1
-    # the 27 words within one tile (about 42% of the time): at fixed steps from the middle one
+    # the 27 words within one tile (about 42% of the time): at fixed steps from the first
     one_tile = inside and 0 < bx & tm < tm and 0 < by & tm < tm and 0 < bz & tm < tm
-    middle = np.uint64(maps.block_word(3, 0, nb, bx, by, bz) - 1 - (1 << t) - (1 << (2 * t))) if one_tile else np.uint64(0)
+    first = np.uint64(0)  # word (bx - 1, by - 1, bz - 1)
+    if one_tile:
+        first = np.uint64(maps.block_word(3, 0, nb, bx, by, bz) - 1 - (1 << t) - (1 << (2 * t)))
     any_set = np.uint64(0)
     for c in range(3):
         for b in range(3):
             for a in range(3):
                 if one_tile:
-                    w = words[middle + np.uint64(a + (b << t) + (c << (2 * t)))]
+                    w = words[first + np.uint64(a + (b << t) + (c << (2 * t)))]
                 elif inside:  # away from the grid's faces, no bounds to check
                     w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
                 else:
