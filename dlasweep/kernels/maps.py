@@ -146,12 +146,17 @@ def layout(dim, width, most=64):
 
 
 @inline
+def tile_number(dim, tiles, ti, tj, tk):
+    """Number of tile (ti, tj, tk) of a grid of ``tiles`` tiles a side, tile after tile in raster order."""
+    return ti + tiles * (tj + (tiles * tk if dim == 3 else 0))
+
+
+@inline
 def tiled(dim, bits, side, i, j, k):
     """Position of cell (i, j, k) of a grid of ``side`` cells a side stored in
     square (cubic) tiles of ``2**bits`` cells a side, tile after tile."""
     last = (1 << bits) - 1
-    tiles = (side + last) >> bits
-    tile = (i >> bits) + tiles * ((j >> bits) + (tiles * (k >> bits) if dim == 3 else 0))
+    tile = tile_number(dim, (side + last) >> bits, i >> bits, j >> bits, k >> bits)
     inner = (i & last) | ((j & last) << bits)
     if dim == 3:
         inner |= (k & last) << (2 * bits)
@@ -227,11 +232,16 @@ def field_cell(dim, fw, ci, cj, ck):
     return tiled(dim, FIELD_TILE[dim], fw, ci, cj, ck)
 
 
+@inline
+def _field_tiles(dim, fw):
+    """Tiles a side of a field of ``fw`` cells a side."""
+    return (fw + (1 << FIELD_TILE[dim]) - 1) >> FIELD_TILE[dim]
+
+
 @jit
 def field_size(dim, fw):
     """Cells a field of ``fw`` cells a side holds, whole tiles."""
-    t = FIELD_TILE[dim]
-    return (((fw + (1 << t) - 1) >> t) << t) ** dim
+    return (_field_tiles(dim, fw) << FIELD_TILE[dim]) ** dim
 
 
 @borrow
@@ -269,8 +279,7 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
 def field_tile(dim, fw, ci, cj, ck):
     """The tile of cell (ci, cj, ck) in a field of ``fw`` cells a side (``field_fill``'s ``held``)."""
     t = FIELD_TILE[dim]
-    n = (fw + (1 << t) - 1) >> t
-    return (ci >> t) + n * ((cj >> t) + (n * (ck >> t) if dim == 3 else 0))
+    return tile_number(dim, _field_tiles(dim, fw), ci >> t, cj >> t, ck >> t)
 
 
 @jit
@@ -291,17 +300,17 @@ def field_fill(field, dim, fw, cap, held):
     to filling it whole).
     """
     t = FIELD_TILE[dim]
-    n = (fw + (1 << t) - 1) >> t
+    n = _field_tiles(dim, fw)
     nzt = n if dim == 3 else 1
     near = np.zeros(len(held), np.bool_)
     for tz in range(nzt):
         for ty in range(n):
             for tx in range(n):
-                if held[tx + n * (ty + n * tz)]:
+                if held[tile_number(dim, n, tx, ty, tz)]:
                     for z in range(max(tz - 1, 0), min(tz + 1, nzt - 1) + 1):
                         for y in range(max(ty - 1, 0), min(ty + 1, n - 1) + 1):
                             for x in range(max(tx - 1, 0), min(tx + 1, n - 1) + 1):
-                                near[x + n * (y + n * z)] = True
+                                near[tile_number(dim, n, x, y, z)] = True
     nz = fw if dim == 3 else 1
     for sweep in range(2):
         g = 1 - 2 * sweep  # +1 forward, -1 backward
@@ -311,7 +320,7 @@ def field_fill(field, dim, fw, cap, held):
                 b = bb if g > 0 else fw - 1 - bb
                 for tt in range(n):
                     tx = tt if g > 0 else n - 1 - tt
-                    if not near[tx + n * ((b >> t) + n * (c >> t))]:
+                    if not near[tile_number(dim, n, tx, b >> t, c >> t)]:
                         continue
                     lo, hi = tx << t, min(fw, (tx + 1) << t)
                     for aa in range(lo, hi):

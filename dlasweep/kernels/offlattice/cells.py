@@ -237,11 +237,19 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     """Maps and cell list for particles 0..count-1, sized for ``need``, with
     room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
+    heads = _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
+    for i in range(count):
+        mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
+    return gi, gf, words, start, blocks, cells, dirr, heads, field
+
+
+@jit
+def _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads):
+    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled)."""
     for i in range(count):
         while not insert(i, pts, nxt, dim, gi, gf, dirr, heads):
             heads = more_heads(heads)
-        mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
-    return gi, gf, words, start, blocks, cells, dirr, heads, field
+    return heads
 
 
 @jit
@@ -254,7 +262,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     the old field's cells are copied, and only the particles whose field reached
     beyond the old grid lower the field again. The pyramid and the maps' levels
     are a coarse cell's, not a particle's, above level 1: each cell-list cell (a
-    coarse cell, side ``CELL_SIDE``) marks them once, from the particle at the head
+    coarse cell, side ``CELL_SIDE``) marks them once, from the particle at the end
     of its list. Every stored value is a maximum or a union over particles or
     held cells, so the order does not matter. A rebuild then costs a particle
     its insert and its level-1 marks, not the (2 ``CCAP`` - 1)**dim cells of the
@@ -267,9 +275,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     if line:
         return build_grid(dim, line, size, need, pts, count, nxt, tiles)
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
-    for i in range(count):
-        while not insert(i, pts, nxt, dim, gi, gf, dirr, heads):
-            heads = more_heads(heads)
+    heads = _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
     W = gi[MAP_WIDTH]
     fw = (W + (1 << FS) - 1) >> FS
     old_fw = (old_gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
@@ -288,8 +294,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
                 _centre_lower(field, dim, fw, i0, i1, i2)
                 break
         top = min(len(cells), FS)
-        t, loc = _cell_of(i, pts, dim, gi, gf)
-        if heads[(dirr[t] - 1) * 64 + loc] == i + 1:
+        if nxt[i] < 0:  # the first particle pushed on its cell's list
             level = pyramid_lower(field, dim, W, i0, i1, i2, levels)
             top = len(cells) if level < 0 else min(len(cells), FS + maps.PYRAMID_STEP[dim] * level)
         _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
