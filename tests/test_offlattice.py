@@ -360,12 +360,72 @@ def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     geo = np.array([1500.0 * np.sqrt(2), 1500.0, -1.0])
     far = np.array([1550.0, 1550.0, 0.0])
     steps, parents = np.zeros(n + 1, np.uint32), np.zeros(n + 1, np.int32)
-    count, code = grow._attach(far, 0, n, 5, pts, steps, parents, nxt, geo, 2, False, 0, gi, gf, words, start, blocks,
-                               cellz, dirr, heads, field)
+    count, code = grow._attach(far, 0, n, 5, pts, np.zeros(0, np.int32), steps, parents, nxt, geo, 2, False, 0, gi, gf,
+                               words, start, blocks, cellz, dirr, heads, field)
     assert (count, code) == (n + 1, grow.HEADS_FULL)
     heads = grow._index_late(n, pts, nxt, 2, 0, gi, gf, words, start, blocks, cellz, dirr, heads, field)
     grid = gi, gf, words, start, blocks, cellz, dirr, heads, field
     assert _found(pts, nxt, n, grid) and all(_found(pts, nxt, i, grid) for i in range(0, n, 7))
+
+
+@pytest.mark.parametrize("case", ["3d", "plane", "2d"])
+def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
+    """``cells.sort_cells`` stores a grown cluster's rows cell after cell: each
+    cell's list is then one ascending run of rows holding the particles of that
+    cell and no other, a gather at any point finds the same particles (by their
+    attachment numbers) at the same distances, and ``attachment_order`` gives
+    back the rows in attachment order."""
+    from dlasweep.kernels.offlattice import cells
+
+    params = VARIANTS[case]
+    dim, size = params.get("dim", 2), params.get("size", 0)
+    line = params.get("seed_shape") == "line"
+    grown = dla.grow(3000, seed=4, **OFF, **params).points
+    n = len(grown)
+    need = grown[:, -1].max() if line else np.abs(grown).max()
+    pts = grown.copy()
+    nxt = np.full(n, -1, np.int32)
+    gi, gf, words, start, blocks, cellz, dirr, heads, field = cells.build_grid(dim, line, size, need, pts, n, nxt, 0)
+    rng = np.random.default_rng(1)
+    probes = grown[rng.integers(0, n, 300)] + rng.uniform(-2.5, 2.5, (300, dim))
+    lists = np.empty(1024), np.empty(1024), np.zeros(1024), np.empty(1024, np.int64)
+
+    def gathered(rows, order):
+        found = []
+        for c in probes:
+            nl, near2 = cells.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
+            found.append((sorted(order[lists[3][:nl]]), near2))
+        return found
+
+    before = gathered(pts, np.arange(n))
+    order = np.arange(n, dtype=np.int32)
+    cells.sort_cells(pts, order, nxt, n, dim, gi, gf, dirr, heads)
+    assert not (order == np.arange(n)).all()
+    np.testing.assert_array_equal(pts, grown[order])
+    assert gathered(pts, order) == before
+    place = [cells._cell_of(i, pts, dim, gi, gf) for i in range(n)]
+    for i in range(n):  # each run ascends within one cell and ends where the cell does
+        assert nxt[i] == -1 or (nxt[i] == i + 1 and place[i] == place[i + 1])
+        assert i == 0 or place[i - 1] == place[i] or nxt[i - 1] == -1
+    cells.attachment_order(pts, order, n)
+    np.testing.assert_array_equal(pts, grown)
+    np.testing.assert_array_equal(order, np.arange(n))
+
+
+def test_a_3d_cluster_grown_in_sorted_rows_keeps_its_parents_and_contacts():
+    """Past ``SORT_FIRST`` particles a 3D cluster's rows are stored cell after cell
+    (``grow.BY_CELL``) and sorted again as it grows: what comes out is still in
+    attachment order, each particle touching its parent, the nearest earlier one."""
+    from dlasweep.kernels.offlattice import grow
+
+    assert grow.BY_CELL[3]
+    n = int(grow.SORT_FIRST * grow.SORT_GROWTH ** 3) + 100  # three sorts
+    c = dla.grow(n, seed=2, **OFF, dim=3)
+    assert naive.min_pair(c.points, c.params) >= 1.0 - 1e-9
+    np.testing.assert_allclose(naive.contacts(c.points, c.params), 1.0, atol=1e-9)
+    for i in range(1, n, 37):
+        d = np.linalg.norm(c.points[:i] - c.points[i], axis=1)
+        assert np.argmin(d) == c.parents[i] and abs(d.min() - 1.0) < 1e-9, i
 
 
 @pytest.mark.parametrize("case", ["2d", "3d", "block", "block-3d", "box"])

@@ -17,7 +17,9 @@ The grid's geometry is two small arrays built by ``_layout``, ``gi``
 freezes them into the kernels as constants).
 
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
-field)`` that ``build_grid`` returns.
+field)`` that ``build_grid`` returns. The particles' rows may be stored cell
+after cell (``sort_cells``): the cell list then links rows, and the caller
+keeps each row's attachment number.
 """
 
 import numpy as np
@@ -154,6 +156,59 @@ def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     nxt[i] = heads[h] - 1
     heads[h] = i + 1
     return True
+
+
+@jit
+def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
+    """Store particles 0..count-1 cell after cell, and their lists in that order.
+
+    A gather then reads each cell's particles from one stretch of ``pts``
+    instead of one cache line each, scattered in attachment order. Rows of
+    ``pts`` and ``order`` (the attachment number of the particle in each row)
+    move together; ``nxt`` and ``heads`` serve as scratch, then hold the lists
+    again, each cell's rows in ascending order. Nothing is allocated: the
+    permutation is followed cycle by cycle in place.
+    """
+    used = gi[TILES_USED] * 64
+    heads[:used] = 0
+    for i in range(count):
+        t, loc = _cell_of(i, pts, dim, gi, gf)
+        heads[(dirr[t] - 1) * 64 + loc] += 1
+    run = 0
+    for h in range(used):
+        here = heads[h]
+        heads[h] = run
+        run += here
+    for i in range(count):
+        t, loc = _cell_of(i, pts, dim, gi, gf)
+        h = (dirr[t] - 1) * 64 + loc
+        nxt[i] = heads[h]  # the row particle i moves to
+        heads[h] += 1
+    for i in range(count):
+        while nxt[i] != i:
+            j = nxt[i]
+            for a in range(dim):
+                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
+            order[i], order[j] = order[j], order[i]
+            nxt[i], nxt[j] = nxt[j], j
+    first = 0
+    for h in range(used):
+        end = heads[h]  # one past the cell's last row
+        heads[h] = first + 1 if end > first else 0
+        for i in range(first, end):
+            nxt[i] = i + 1 if i + 1 < end else -1
+        first = end
+
+
+@jit
+def attachment_order(pts, order, count):
+    """Put the rows of ``pts`` back in attachment order (undo ``sort_cells``), in place."""
+    for i in range(count):
+        while order[i] != i:
+            j = order[i]
+            for a in range(pts.shape[1]):
+                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
+            order[i], order[j] = order[j], j
 
 
 @jit
@@ -524,6 +579,10 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     tb = gi[TILE_SHIFT]
     m = (1 << tb) - 1
     half = 0.5 * size
+    # first the heads of the window's cells, kept at the end of li, then their lists: the
+    # reads of the lists' first particles no longer wait on one another
+    top = len(li) - 1
+    nh = 0
     for k2 in range(lo2, hi2 + 1):
         for k1 in range(lo1, hi1 + 1):
             c1 = k1 % n1 if p1 else k1
@@ -533,29 +592,34 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
                 if tile < 0:
                     continue
                 h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))] - 1
-                while h >= 0:
-                    d0 = pts[h, 0] - c[0]
-                    d1 = pts[h, 1] - c[1]
-                    d2 = pts[h, 2] - c[2] if dim == 3 else 0.0
-                    if p0:
-                        if d0 > half:
-                            d0 -= size
-                        elif d0 < -half:
-                            d0 += size
-                    if p1:
-                        if d1 > half:
-                            d1 -= size
-                        elif d1 < -half:
-                            d1 += size
-                    q = d0 * d0 + d1 * d1 + d2 * d2
-                    if q < r2 and nl < len(lx):
-                        lx[nl] = c[0] + d0
-                        ly[nl] = c[1] + d1
-                        lz[nl] = c[2] + d2
-                        li[nl] = h
-                        nl += 1
-                        near2 = min(near2, q)
-                    h = nxt[h]
+                if h >= 0:
+                    li[top - nh] = h
+                    nh += 1
+    for cell in range(nh):
+        h = li[top - cell]
+        while h >= 0:
+            d0 = pts[h, 0] - c[0]
+            d1 = pts[h, 1] - c[1]
+            d2 = pts[h, 2] - c[2] if dim == 3 else 0.0
+            if p0:
+                if d0 > half:
+                    d0 -= size
+                elif d0 < -half:
+                    d0 += size
+            if p1:
+                if d1 > half:
+                    d1 -= size
+                elif d1 < -half:
+                    d1 += size
+            q = d0 * d0 + d1 * d1 + d2 * d2
+            if q < r2 and nl <= top - nh:
+                lx[nl] = c[0] + d0
+                ly[nl] = c[1] + d1
+                lz[nl] = c[2] + d2
+                li[nl] = h
+                nl += 1
+                near2 = min(near2, q)
+            h = nxt[h]
     return nl, near2
 
 
