@@ -55,7 +55,8 @@ SORT_FIRST = 4096
 """Particles at the first sort (fewer fit in the caches whatever their order)."""
 SORT_GROWTH = 1.25
 """The rows are sorted again each time the cluster has grown by this factor: the newest
-particles, stored in attachment order, are a fifth of all."""
+particles, stored in attachment order, are a fifth of all. 3D 3e6, one after the other on one
+core (a benchmark on the other): 1.1 took 64.0 s against 60.9, 1.5 60.3 against 58.5."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 
