@@ -173,15 +173,15 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
     heads[:used] = 0
     for i in range(count):
         t, loc = _cell_of(i, pts, dim, gi, gf)
-        heads[(dirr[t] - 1) * 64 + loc] += 1
+        nxt[i] = (dirr[t] - 1) * 64 + loc  # the particle's cell, until its row replaces it
+        heads[nxt[i]] += 1
     run = 0
     for h in range(used):
         here = heads[h]
         heads[h] = run
         run += here
     for i in range(count):
-        t, loc = _cell_of(i, pts, dim, gi, gf)
-        h = (dirr[t] - 1) * 64 + loc
+        h = nxt[i]
         nxt[i] = heads[h]  # the row particle i moves to
         heads[h] += 1
     for i in range(count):

@@ -22,6 +22,7 @@ from .cells import (
     INF,
     NEAR,
     TILES_USED,
+    attachment_order,
     build_grid,
     face_gap,
     gather,
@@ -33,7 +34,6 @@ from .cells import (
     no_grid,
     regrow_grid,
     sort_cells,
-    attachment_order,
     walk_geometry,
 )
 from ..centres import FS, centre_gap, pyramid_dist
@@ -358,8 +358,8 @@ def _attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim
             blocks, cells, dirr, heads, field):
     """Add the walker at w to the cluster, its parent the particle it touched
     (``contact.settle`` records its row of ``pts``; ``order`` holds each row's
-    attachment number where the rows are stored by cell, ``cells.sort_cells``). Returns the new count and ``IN_GRID``,
-    ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
+    attachment number where the rows are stored by cell, ``cells.sort_cells``).
+    Returns the new count and ``IN_GRID``, ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
     cell-list tiles (then the particle is not yet in the grid: the caller
     drops it and builds a larger one). It takes the grid's arrays one by one
     and returns none: a tuple of them cost reference counting at each particle."""
@@ -377,9 +377,7 @@ def _attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim
         ch = max(ch, abs(w[a]))
     steps[count] = diffusion_time(pending)
     row = int(parent)
-    parents[count] = order[row] if row >= 0 and len(order) > 0 else row
-    if len(order) > 0:
-        order[count] = count
+    parents[count] = order[row] if row >= 0 and len(order) > 0 else row  # a new row's number is its own
     geo[0] = max(geo[0], np.sqrt(r2))
     geo[1] = max(geo[1], ch)
     geo[2] = max(geo[2], w[up])
