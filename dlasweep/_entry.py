@@ -1,20 +1,50 @@
-"""The ``dlasweep`` console command's entry: Ctrl-C while the command's modules load ends it in one line.
+"""The ``dlasweep`` console command's entry: Ctrl-C at any moment ends it in one line.
 
 ``cli`` loads numpy, numba and netCDF (about 1.5 s); an interrupt then
 would otherwise print a traceback. The package's own ``__init__`` loads
 nothing heavy, so this module runs before any of it.
 """
 
+import _thread
 import os
 import sys
+import time
+
+REDELIVERY_SECONDS = 0.05
+"""How long an ignored Ctrl-C waits to be raised again: the main thread has long left the hook by then."""
 
 
 def run() -> None:
-    """Load ``cli`` and run the command (``cli.run``); exit 130 with one line on Ctrl-C while loading."""
+    """Run the command (``cli.run``); exit 130 with one line on a Ctrl-C that ``cli`` did not catch."""
+    sys.unraisablehook = _deliver_again(sys.unraisablehook)
     try:
         from .cli import run as main
+        main()
     except KeyboardInterrupt:
         command = sys.argv[1] if len(sys.argv) > 1 and not sys.argv[1].startswith("-") else ""
         print(f"dlasweep {command}".rstrip() + ": interrupted", file=sys.stderr, flush=True)
         os._exit(130)
-    main()
+
+
+def _deliver_again(hook):
+    """``hook``, except that a Ctrl-C raised where Python must ignore it is raised again in the main thread.
+
+    Python raises ``KeyboardInterrupt`` in whatever code runs when the
+    signal arrives. In a weakref callback or a ``__del__`` (an import lock
+    freed while the modules load, say) it can only print "Exception
+    ignored" and go on, and the command then ran to its end: 1 in about 200
+    interrupts while loading. It is raised again from another thread a
+    moment later: raised at once, it would land in this hook and be
+    ignored as well.
+    """
+    def deliver_again(unraisable):
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            _thread.start_new_thread(_interrupt_main_soon, ())
+        else:
+            hook(unraisable)
+    return deliver_again
+
+
+def _interrupt_main_soon():
+    time.sleep(REDELIVERY_SECONDS)
+    _thread.interrupt_main()

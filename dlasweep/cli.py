@@ -68,8 +68,8 @@ def main(argv=None) -> int:
     """Run the command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     command = "dlasweep"
-    parser = _parser()
     try:
+        parser = _parser()
         args = parser.parse_args(argv)
         if args.command is None:
             _say(parser.format_help().rstrip())
