@@ -7,6 +7,7 @@ nothing heavy, so this module runs before any of it.
 
 import _thread
 import os
+import signal
 import sys
 import time
 
@@ -15,10 +16,32 @@ REDELIVERY_SECONDS = 0.05
 
 
 def run() -> None:
-    """Run the command (``cli.run``); exit 130 with one line on a Ctrl-C that ``cli`` did not catch."""
+    """Run the command (``cli.run``); exit 130 with one line on a Ctrl-C that ``cli`` did not catch.
+
+    While ``cli`` loads, Ctrl-C is noted as well as raised: a library that
+    swallowed it (1 interrupt in about 400 while loading did, with no trace)
+    or turned it into another error (``RuntimeError`` from a class's
+    ``__set_name__``) would otherwise leave the command to run on.
+    """
     sys.unraisablehook = _deliver_again(sys.unraisablehook)
+    noted = []
+    handler = signal.getsignal(signal.SIGINT)
+
+    def note(signum, frame):
+        noted.append(signum)
+        handler(signum, frame)
+
+    if handler is signal.default_int_handler:  # not where Ctrl-C is ignored (a shell's background job)
+        signal.signal(signal.SIGINT, note)
     try:
-        from .cli import run as main
+        try:
+            from .cli import run as main
+        except Exception:
+            if not noted:
+                raise
+        if noted:
+            raise KeyboardInterrupt
+        signal.signal(signal.SIGINT, handler)
         main()
     except KeyboardInterrupt:
         command = sys.argv[1] if len(sys.argv) > 1 and not sys.argv[1].startswith("-") else ""

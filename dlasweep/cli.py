@@ -84,6 +84,8 @@ def main(argv=None) -> int:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
     except KeyboardInterrupt as err:
+        if command == "dlasweep" and argv and not argv[0].startswith("-"):  # interrupted while parsing
+            command = f"dlasweep {argv[0]}"
         _say(f"{command}: interrupted{_kept(err)}")
         return 130
     except (UsageError, SpecError, store.StoreError, ResumeError) as err:
