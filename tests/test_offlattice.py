@@ -231,6 +231,36 @@ def test_stickiness_makes_denser_and_kill_factor_agrees():
     assert rg["sticky"] < 0.85 * rg["exact"]
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("n", [500, 1])
+def test_the_maps_keep_the_levels_their_bound_reads(dim, n):
+    """Below a pyramid the maps hold level 1 alone, and bound as every level would: ``map_dist`` at
+    random points equals its value over maps of every level, each marked for every particle (level s:
+    the 3**dim level-s cells about each particle's). The 2D seed's grid, too small for a pyramid, keeps
+    them all, as its bound reads them at the field's cap."""
+    from dlasweep.kernels.offlattice import cells as ol
+
+    rng = np.random.default_rng(dim)
+    pts = rng.normal(0, 25, (6, dim))[rng.integers(0, 6, n)] + rng.normal(0, 6, (n, dim)) if n > 1 else np.zeros((1, dim))
+    gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
+        dim, False, 0, np.abs(pts).max(), pts, n, np.full(n, -1, np.int32), 0)
+    W = gi[ol.MAP_WIDTH]
+    pyramid = len(ol.level_starts(gi, dim)) > 2
+    assert pyramid == (n > 1 or dim == 3) and (len(cells) == ol.FS) == pyramid
+    every_start, every_blocks, every_cells = maps.layout(dim, W)
+    every_start -= every_start[1]
+    every = np.zeros(every_start[-1], np.uint64)
+    off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
+    for p in np.floor(pts).astype(int) + off:
+        ol._mark_levels(every, dim, every_start, every_blocks, every_cells, *np.r_[p, np.zeros(3 - dim, int)],
+                        len(every_cells))
+    q = pts[rng.integers(0, n, 3000)] + rng.normal(0, 1, (3000, dim)) * rng.choice([0.5, 3.0, 20.0], (3000, 1))
+    for x in q:
+        w = np.r_[x, np.zeros(3 - dim)]
+        assert (ol.map_dist(w, dim, 0, gi, words, start, blocks, cells, field)
+                == ol.map_dist(w, dim, 0, gi, every, every_start, every_blocks, every_cells, field)), x
+
+
 @pytest.mark.parametrize("dim, line", [(2, False), (3, False), (2, True), (3, True)])
 def test_field_and_maps_bound_the_nearest_distance(dim, line):
     """The free-distance bound of the centre field, the pyramid above it
