@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench import exponent_attribute
+from .bench import SCALING, exponent_attribute, power_label
 from .schema import plain
 from .figures import colour_of, new_figure, save_figure
 
@@ -38,9 +38,11 @@ def plot_bench(ds, outdir) -> Path:
     method = np.array([str(plain(v)) for v in ds["method"].values])
     n, seconds = ds["n"].values.astype(float), ds["seconds"].values.astype(float)
     fig, (ax,) = new_figure(1, 6.5, 4.5)
+    lo, hi = SCALING
     for c, name in enumerate(dict.fromkeys(model)):
         exponent = ds.attrs.get(exponent_attribute(name))
-        fitted = f", time $\\propto N^{{{exponent:.2f}}}$" if exponent is not None else ""
+        fitted = ("" if exponent is None else
+                  f", time $\\propto N^{{{exponent:.2f}}}$ over N in [{power_label(lo)}, {power_label(hi)}]")
         for kind, style, label in (
             ("exact", dict(marker="o", ls="-"), name + fitted),
             ("naive", dict(marker="x", ls=":", ms=8), f"{name}, naive walk (single steps, kill circle)"),

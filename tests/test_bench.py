@@ -62,6 +62,21 @@ def test_target_table_compares_each_figure_with_its_target():
     assert table["offlattice-3d"][5:] == ["", ""]  # no 1e5 run: no exponent, no growth
 
 
+def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
+    # one fit for the table, the file's attribute, the printed line and the chart: runs below 1e5 (here
+    # 1e3 and 1e4, at a tenth of the time the N^1.2 law gives) would pull an all-N fit to 1.25
+    from dlasweep.bench import _to_dataset, cost_exponent, target_table
+
+    rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2 * (0.1 if n < 10**5 else 1),
+             "n_grown": n, "steps": 10 * n, "status": "ok", "peak_mb": 200.0, "added_mb": 1.0}
+            for n in (10**3, 10**4, 10**5, 10**6, 10**7)]
+    ds = _to_dataset(rows)
+    slope, lo, hi = cost_exponent(ds)
+    assert (round(slope, 6), lo, hi) == (1.2, 10**5, 10**7)
+    assert target_table(ds)[2].split(" | ")[5] == "1.20 (<= 1.06: 13% over)"
+    assert cost_exponent(_to_dataset(rows[:3])) is None  # one N in range: no slope
+
+
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():
     from dlasweep.bench import RATIO_TARGET, sweep_ratios
 
