@@ -31,7 +31,8 @@ def run() -> None:
         noted.append(signum)
         handler(signum, frame)
 
-    if handler is signal.default_int_handler:  # not where Ctrl-C is ignored (a shell's background job)
+    noting = handler is signal.default_int_handler  # not where Ctrl-C is ignored (a shell's background job)
+    if noting:
         signal.signal(signal.SIGINT, note)
     try:
         try:
@@ -41,7 +42,8 @@ def run() -> None:
                 raise
         if noted:
             raise KeyboardInterrupt
-        signal.signal(signal.SIGINT, handler)
+        if noting:
+            signal.signal(signal.SIGINT, handler)
         main()
     except KeyboardInterrupt:
         command = sys.argv[1] if len(sys.argv) > 1 and not sys.argv[1].startswith("-") else ""
