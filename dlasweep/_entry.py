@@ -46,9 +46,13 @@ def run() -> None:
             signal.signal(signal.SIGINT, handler)
         main()
     except KeyboardInterrupt:
-        command = sys.argv[1] if len(sys.argv) > 1 and not sys.argv[1].startswith("-") else ""
-        print(f"dlasweep {command}".rstrip() + ": interrupted", file=sys.stderr, flush=True)
+        print(f"{command_of(sys.argv[1:])}: interrupted", file=sys.stderr, flush=True)
         os._exit(130)
+
+
+def command_of(argv) -> str:
+    """The command a command line names, before it is parsed: ``dlasweep grow``, or ``dlasweep``."""
+    return f"dlasweep {argv[0]}" if argv and not argv[0].startswith("-") else "dlasweep"
 
 
 def _deliver_again(hook):

@@ -25,6 +25,7 @@ from . import export as _export
 from . import params as _params
 from . import plan as _plan
 from . import info, ragged, slurm, store
+from ._entry import command_of
 from ._version import __version__
 from .grow import grow
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
@@ -84,8 +85,8 @@ def main(argv=None) -> int:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
     except KeyboardInterrupt as err:
-        if command == "dlasweep" and argv and not argv[0].startswith("-"):  # interrupted while parsing
-            command = f"dlasweep {argv[0]}"
+        if command == "dlasweep":  # interrupted while parsing
+            command = command_of(argv)
         _say(f"{command}: interrupted{_kept(err)}")
         return 130
     except (UsageError, SpecError, store.StoreError, ResumeError) as err:

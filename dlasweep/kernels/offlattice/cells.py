@@ -359,7 +359,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
                 _centre_lower(field, dim, fw, i0, i1, i2)
                 break
         top = min(len(cells), FS)
-        if _first_in_coarse_cell(i, pts, nxt, dim, gi):
+        if _first_in_coarse_cell(i0, i1, i2, nxt[i], pts, nxt, dim, gi):
             level = pyramid_lower(field, dim, W, i0, i1, i2, levels)
             top = len(cells) if level < 0 else min(len(cells), FS + maps.PYRAMID_STEP[dim] * level)
         _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
@@ -367,16 +367,13 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
 
 
 @borrow
-def _first_in_coarse_cell(i, pts, nxt, dim, gi):
-    """Whether particle i was the first pushed on its cell's list of those in its coarse cell (of side
-    ``2**FS``, within the list's cell): none pushed before it, further down the list, shares it."""
-    j = nxt[i]
+def _first_in_coarse_cell(i0, i1, i2, j, pts, nxt, dim, gi):
+    """Whether a particle at map cell (i0, i1, i2), its cell's list going on at j, was the first pushed
+    on that list of those in its coarse cell (of side ``2**FS``): none further down the list shares it."""
     while j >= 0:
-        same = True
-        for a in range(dim):
-            here = (int(np.floor(pts[i, a])) + gi[MAP_OFFSET + a]) >> FS
-            same = same and (int(np.floor(pts[j, a])) + gi[MAP_OFFSET + a]) >> FS == here
-        if same:
+        if ((int(np.floor(pts[j, 0])) + gi[MAP_OFFSET]) >> FS == i0 >> FS
+                and (int(np.floor(pts[j, 1])) + gi[MAP_OFFSET + 1]) >> FS == i1 >> FS
+                and (dim == 2 or (int(np.floor(pts[j, 2])) + gi[MAP_OFFSET + 2]) >> FS == i2 >> FS)):
             return False
         j = nxt[j]
     return True
