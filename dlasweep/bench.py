@@ -167,11 +167,14 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     for name, figures in ends.items():
         ds.attrs.update({f"end_to_end_{name.replace('-', '_')}_{key}": value for key, value in figures.items()})
     for name in MODELS:
-        fitted = cost_exponent(ds.where((ds.model == name) & (ds.method == "exact"), drop=True))
+        exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
+        fitted = cost_exponent(exact)
         if fitted is not None:
             slope, lo, hi = fitted
+            parts = exponent_parts(exact)
             ds.attrs[exponent_attribute(name)] = slope
-            echo(f"{name}: time grows as N^{slope:.2f} from {power_label(lo)} to {power_label(hi)}")
+            ds.attrs.update({exponent_attribute(name, part): value for part, value in parts.items()})
+            echo(_exponent_line(name, slope, lo, hi, parts))
     for n in naive_counts:
         sel = ds.where(ds.n == n, drop=True)
         t = {str(m): float(s) for m, s in zip(sel.method.values, sel.seconds.values)}
@@ -182,6 +185,12 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         for line in target_table(ds):
             echo(line)
     return ds
+
+
+def _exponent_line(name, slope, lo, hi, parts) -> str:
+    """One line: the cost exponent and its parts (``exponent_parts``)."""
+    return (f"{name}: time grows as N^{slope:.2f} from {power_label(lo)} to {power_label(hi)}: N particles "
+            f"x N^{parts['steps']:.3f} steps a particle x N^{parts['step_cost']:.3f} ns a step")
 
 
 def _end_to_end_line(name, n, figures) -> str:
@@ -254,17 +263,37 @@ def cost_exponent(exact: xr.Dataset) -> tuple[float, int, int] | None:
     The runs below (1e4, and lattice 2D's 1e3 and 3e3 beside the naive walk) are left out: their
     grids fit the caches, and they would lower the slope that the targets are set on.
     """
-    lo, hi = SCALING
-    fit = exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
+    fit = _in_scaling(exact)
     n = fit.n.values.astype(float)
     if len(np.unique(n)) < 2:
         return None
-    return float(np.polyfit(np.log(n), np.log(fit.seconds.values), 1)[0]), int(n.min()), int(n.max())
+    return _slope(fit, fit.seconds), int(n.min()), int(n.max())
 
 
-def exponent_attribute(model: str) -> str:
-    """The global attribute holding ``model``'s cost exponent: ``cost_exponent_lattice_2d`` (CF: no hyphens)."""
-    return f"cost_exponent_{model.replace('-', '_')}"
+def exponent_parts(exact: xr.Dataset) -> dict[str, float]:
+    """The cost exponent split as time = N x steps a particle x seconds a step: the slopes of the last
+    two over the same runs as ``cost_exponent``, which add up to its slope less one (least squares
+    is linear in the logs). Steps grow like log N with any walk-on-spheres walk; the cost of a step
+    grows as the grids outgrow the caches."""
+    fit = _in_scaling(exact)
+    return {"steps": _slope(fit, fit.walk_steps / fit.n_grown), "step_cost": _slope(fit, fit.seconds / fit.walk_steps)}
+
+
+def _in_scaling(exact: xr.Dataset) -> xr.Dataset:
+    """The runs with N in ``SCALING``."""
+    lo, hi = SCALING
+    return exact.where((exact.n >= lo) & (exact.n <= hi), drop=True)
+
+
+def _slope(fit: xr.Dataset, values: xr.DataArray) -> float:
+    """The least-squares slope of log ``values`` against log N."""
+    return float(np.polyfit(np.log(fit.n.values.astype(float)), np.log(values.values.astype(float)), 1)[0])
+
+
+def exponent_attribute(model: str, part: str = "") -> str:
+    """The global attribute holding ``model``'s cost exponent, ``cost_exponent_lattice_2d`` (CF: no
+    hyphens), or one of its ``exponent_parts``: ``cost_exponent_steps_lattice_2d``."""
+    return f"cost_exponent_{part + '_' if part else ''}{model.replace('-', '_')}"
 
 
 def _to_dataset(rows) -> xr.Dataset:

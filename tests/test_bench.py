@@ -77,6 +77,27 @@ def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
     assert cost_exponent(_to_dataset(rows[:3])) is None  # one N in range: no slope
 
 
+def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
+    # steps a particle as N^0.05 (with noise a log-log fit must carry through) and the whole time as
+    # N^1.2: the parts are 0.05 and 0.15 where the fit is exact, and add up to the slope less one always
+    from dlasweep.bench import _exponent_line, _to_dataset, cost_exponent, exponent_parts
+
+    def rows(wobble):
+        return [{"model": "offlattice-3d", "method": "exact", "n": n, "seconds": 3e-6 * n**1.2 * w,
+                 "n_grown": n, "steps": int(40 * n * n**0.05), "status": "ok", "peak_mb": 200.0, "added_mb": 1.0}
+                for n, w in zip((10**4, 10**5, 10**6, 10**7), wobble)]
+
+    parts = exponent_parts(_to_dataset(rows([1.0] * 4)))
+    assert (round(parts["steps"], 4), round(parts["step_cost"], 4)) == (0.05, 0.15)
+    ds = _to_dataset(rows([0.3, 1.0, 1.3, 0.9]))  # 1e4 (outside the fit) and the rest off the law
+    slope, lo, hi = cost_exponent(ds)
+    parts = exponent_parts(ds)
+    assert abs(1 + parts["steps"] + parts["step_cost"] - slope) < 1e-9 and abs(parts["step_cost"] - 0.15) > 0.01
+    assert _exponent_line("offlattice-3d", slope, lo, hi, parts) == (
+        f"offlattice-3d: time grows as N^{slope:.2f} from 1e5 to 1e7: N particles x N^0.050 steps a particle "
+        f"x N^{parts['step_cost']:.3f} ns a step")
+
+
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():
     from dlasweep.bench import RATIO_TARGET, sweep_ratios
 
