@@ -4,6 +4,13 @@
 once; ``nogil`` lets threads of one worker share it; ``fastmath`` stays off so
 that results are bit-identical wherever they are computed.
 
+The hot kernels are compiled for one dimension at a time: the dimension
+comes down to them as a literal argument (``numba.literally``), compiled
+only when used, and is turned there into a constant, ``dim =
+np.int64(2) if dimension == 2 else np.int64(3)`` (numba prunes the branch
+the literal rules out), for LLVM to fold the kernel's branches on it; not
+the literal itself, which would recompile every helper it is passed to.
+
 numba's cache checks only the defining file of a function: after editing a
 helper in another module, delete ``dlasweep/**/__pycache__/*.nb[ic]`` or the
 callers keep the old machine code. An install replaces every file, so users

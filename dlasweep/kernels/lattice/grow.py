@@ -21,6 +21,7 @@ exactly (Poisson kernel) instead of wandering off.
 """
 
 import numpy as np
+from numba import literally
 
 from ..._jit import borrow, cached, clock, jit
 from .. import maps
@@ -288,7 +289,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
 
 
 @jit
-def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
+def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
     """Grow a lattice cluster of up to ``n`` particles.
 
     After the seed, one walker at a time is released on the launch circle
@@ -301,6 +302,10 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
 
     Parameters
     ----------
+    dimension : int
+        The model's dimension, a literal: each is compiled apart, its
+        branches on ``dim`` folded away: 2D 1e6, six runs side by side on
+        the two cores, 0.87 to 0.93 of the time; 3D 5e4, 0.97 to 1.03.
     n : int
     model : Model
         The model (``kernels.model.Model``).
@@ -321,8 +326,10 @@ def _grow(n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_a
     count : int
     status : int, a code of ``dlasweep.params.STATUSES``
     """
+    literally(dimension)
     t0 = clock()
-    dim, size = model.dim, model.size
+    dim = np.int64(2) if dimension == 2 else np.int64(3)  # a constant, not a literal (``_jit``)
+    size = model.size
     line = model.seed_shape == codes.LINE
     period = size if line else 0
     rs = seed_stream(rng)
@@ -657,13 +664,16 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
 
 
 @jit
-def _grow_each(n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds, t_start, t_cut, t_alias,
-               t_off):
-    """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays."""
+def _grow_each(dimension, n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds, t_start, t_cut,
+               t_alias, t_off):
+    """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays.
+
+    ``dimension`` (the model's) is a literal: each is compiled apart, and only when used."""
+    literally(dimension)
     for i in range(len(rngs)):
         start = clock()
-        counts[i], statuses[i] = _grow(n, model, moves, marks, rngs[i], points[i], steps[i], times[i], t_start, t_cut,
-                                       t_alias, t_off)
+        counts[i], statuses[i] = _grow(dimension, n, model, moves, marks, rngs[i], points[i], steps[i], times[i],
+                                       t_start, t_cut, t_alias, t_off)
         seconds[i] = clock() - start
 
 
@@ -700,7 +710,7 @@ def grow_lattice(n, p, marks, rngs, times=None):
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
     moves = unit_moves(model.dim, moore)
-    _grow_each(n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps, times,
+    _grow_each(model.dim, n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps, times,
                counts, statuses, seconds, *exit_tables(model.dim, moore))
     nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
     period = model.size if model.seed_shape == codes.LINE else 0
