@@ -42,11 +42,15 @@ lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
 
 
 
-def cached(kernel) -> bool:
-    """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made).
+def cached(kernel, first=None) -> bool:
+    """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made);
+    with ``first``, code for that literal first argument (a kernel compiled apart for each).
 
     Reads numba's own cache index, the one place this package looks inside numba."""
-    return os.path.exists(kernel._cache._cache_file._index_path)
+    cache = kernel._cache._cache_file
+    if first is None:
+        return os.path.exists(cache._index_path)
+    return any(getattr(key[0][0], "literal_value", None) == first for key in cache._load_index())
 
 
 # The growth kernels take a batch's generators as a Python list: numba's

@@ -223,15 +223,15 @@ def _more_seeds(spec, n, half_width, failed):
 
 
 def _compiles(spec) -> bool:
-    """Whether the first tasks compile kernels: numba's cache lacks the growth kernel of a model swept."""
-    return not all(map(compiled, _first_task_of_each_model(spec)))
+    """Whether the first tasks compile kernels: numba's cache lacks a growth kernel the spec needs."""
+    return not all(compiled(model, dim) for model, dim in _first_task_of_each_kernel(spec))
 
 
-def _first_task_of_each_model(spec) -> dict:
-    """Model name -> the first task of the spec that grows it."""
+def _first_task_of_each_kernel(spec) -> dict:
+    """(model name, dimension) -> the first task of the spec that grows it: each is a kernel of its own."""
     first = {}
     for task in spec.tasks():
-        first.setdefault(task.params["model"], task)
+        first.setdefault((task.params["model"], task.params["dim"]), task)
     return first
 
 
@@ -252,7 +252,7 @@ def _batches(todo, size, threads):
 
 
 def _load_kernels(spec):
-    """Grow and measure a cluster of a few particles of each model swept.
+    """Grow and measure a cluster of a few particles of each model and dimension swept.
 
     The kernels its tasks call load (or compile) here, once, while the
     embedded cluster starts, not in each of its threads at once, one
@@ -260,7 +260,7 @@ def _load_kernels(spec):
     xarray imports when it builds the dataset: imported while the tasks
     ran, it held the GIL they need between kernels.
     """
-    first = list(_first_task_of_each_model(spec).values())
+    first = list(_first_task_of_each_kernel(spec).values())
     counts = np.array([min(spec.counts[0], 10)])
     measure_tasks(first, counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
     with contextlib.suppress(ImportError):

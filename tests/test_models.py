@@ -240,9 +240,13 @@ def test_compiled_reads_numba_s_cache_of_each_growth_kernel(tmp_path):
     """``grow.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
     where numba's cache is empty."""
     growth = importlib.import_module("dlasweep.grow")
-    dla.grow(20, seed=1), dla.grow(20, seed=1, model="offlattice")
-    assert growth.compiled("lattice") and growth.compiled("offlattice")
-    code = "import importlib; g = importlib.import_module('dlasweep.grow'); print(g.compiled('lattice'), g.compiled('offlattice'))"
+    for model in ("lattice", "offlattice"):
+        for dim in (2, 3):
+            dla.grow(20, seed=1, model=model, dim=dim)
+            assert growth.compiled(model, dim)
+        assert not growth.compiled(model, 4)  # each dimension's kernel is compiled apart
+    code = ("import importlib; g = importlib.import_module('dlasweep.grow'); "
+            "print(g.compiled('lattice', 2), g.compiled('offlattice', 2))")
     fresh = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                            env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     assert fresh.stdout.split() == ["False", "False"]

@@ -718,6 +718,6 @@ def grow_lattice(n, p, marks, rngs, times=None):
             for pts, st, count, *rest in zip(points, steps, counts, statuses, times, seconds)]
 
 
-def compiled() -> bool:
-    """Whether numba's on-disk cache holds this growth kernel (most of its compile time)."""
-    return cached(_grow_each)
+def compiled(dim) -> bool:
+    """Whether numba's on-disk cache holds this growth kernel for ``dim`` (most of its compile time)."""
+    return cached(_grow_each, dim)

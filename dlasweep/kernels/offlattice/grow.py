@@ -653,6 +653,6 @@ def grow_offlattice(n, p, marks, rngs, times=None):
                                                      times)]
 
 
-def compiled() -> bool:
-    """Whether numba's on-disk cache holds this growth kernel (most of its compile time)."""
-    return cached(_grow_each)
+def compiled(dim) -> bool:
+    """Whether numba's on-disk cache holds this growth kernel for ``dim`` (most of its compile time)."""
+    return cached(_grow_each, dim)
