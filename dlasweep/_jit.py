@@ -17,7 +17,6 @@ callers keep the old machine code. An install replaces every file, so users
 are not affected.
 """
 
-import os
 import time
 import warnings
 
@@ -42,15 +41,12 @@ lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
 
 
 
-def cached(kernel, first=None) -> bool:
-    """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made);
-    with ``first``, code for that literal first argument (a kernel compiled apart for each).
+def cached(kernel, first) -> bool:
+    """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made)
+    for the literal first argument ``first`` (a kernel compiled apart for each, as the dimension).
 
     Reads numba's own cache index, the one place this package looks inside numba."""
-    cache = kernel._cache._cache_file
-    if first is None:
-        return os.path.exists(cache._index_path)
-    return any(getattr(key[0][0], "literal_value", None) == first for key in cache._load_index())
+    return any(getattr(key[0][0], "literal_value", None) == first for key in kernel._cache._cache_file._load_index())
 
 
 # The growth kernels take a batch's generators as a Python list: numba's
