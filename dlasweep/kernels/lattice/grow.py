@@ -23,7 +23,7 @@ exactly (Poisson kernel) instead of wandering off.
 import numpy as np
 from numba import literally
 
-from ..._jit import borrow, cached, clock, jit
+from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
@@ -710,8 +710,8 @@ def grow_lattice(n, p, marks, rngs, times=None):
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
     moves = unit_moves(model.dim, moore)
-    _grow_each(model.dim, n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps, times,
-               counts, statuses, seconds, *exit_tables(model.dim, moore))
+    call_literal(_grow_each, model.dim, n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps,
+                 times, counts, statuses, seconds, *exit_tables(model.dim, moore))
     nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
     period = model.size if model.seed_shape == codes.LINE else 0
     return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)

@@ -13,7 +13,7 @@ it moves by ``RAY`` with an exact ray cast (``contact``).
 import numpy as np
 from numba import literally
 
-from ..._jit import borrow, cached, clock, jit
+from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
@@ -649,8 +649,8 @@ def grow_offlattice(n, p, marks, rngs, times=None):
     """
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     model = model_from(p)
-    return [grown(*result) for result in _grow_each(model.dim, int(n), model, np.asarray(marks, np.int64), list(rngs),
-                                                     times)]
+    grown_each = call_literal(_grow_each, model.dim, int(n), model, np.asarray(marks, np.int64), list(rngs), times)
+    return [grown(*result) for result in grown_each]
 
 
 def compiled(dim) -> bool:
