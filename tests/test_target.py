@@ -93,7 +93,10 @@ def test_a_killed_target_sweep_resumes_to_the_same_result(tmp_path, dask_client,
     # The target and the cap may change on resume: each replicate is the same either way.
     same = parse_spec(spec_text(run=f"target_ci = {TARGET}\nmax_seeds = 64"))
     resumed = dla.run_sweep(same, client=dask_client, out=out, resume=True)
-    assert len(resumed_writes) == 2 and sorted(before + resumed_writes) == sorted(written)
+    # Which parts finish before the kill depends on the threads' timing: what is certain is that
+    # the kill came in the second batch of seeds, and that the resumed run grew exactly the rest.
+    assert len(before) > len(written) * FIRST // ds.sizes["seed"]
+    assert resumed_writes and sorted(before + resumed_writes) == sorted(written)
     xr.testing.assert_identical(science(resumed), science(ds))
     xr.testing.assert_identical(resumed["D_ci_half_width"], ds["D_ci_half_width"])
     assert resumed.attrs["stop_reason"] == sweep.TARGET_REACHED and resumed.attrs["max_seeds"] == 64
