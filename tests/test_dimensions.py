@@ -17,7 +17,8 @@ for model in ("lattice", "offlattice"):
         dla.grow(300, seed=seed, model=model, dim=2)
 kernels = [kernel._grow_each for kernel in (lattice, offlattice)]
 print(json.dumps([[str(sig[0]) for sig in kernel.signatures] for kernel in kernels]))
-print(json.dumps(sorted({str(sig[0]) for kernel in kernels for sig in [*kernel.stats.cache_hits, *kernel.stats.cache_misses]})))
+asked = {str(sig[0]) for kernel in kernels for sig in [*kernel.stats.cache_hits, *kernel.stats.cache_misses]}
+print(json.dumps(sorted(asked)))
 """
 
 
