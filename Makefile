@@ -19,8 +19,8 @@ sweep: $(STAMP)
 example: sweep
 	.venv/bin/dlasweep report results/quick.nc -o results/examples/quick
 
-# On every core, a test file to a worker (the files' module fixtures are shared by their tests): 9 minutes
-# on 2 cores with an empty numba cache, against 17 one file after another.
+# On every core, a test file to a worker (the files' module fixtures are shared by their tests): 9 to 11
+# minutes on 2 cores with an empty numba cache, against 17 one file after another.
 test: $(STAMP)
 	$(PY) -m pytest -n auto --dist loadfile
 
