@@ -87,7 +87,7 @@ def test_walk_bound_is_map_dist(dim, line):
     need = pts[:, -1].max() if line else np.abs(pts).max()
     gi, _, words, start, blocks, cellz, _, _, field = cells.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
-    per, m0, m1, m2, W, fw, etop, unit, flo, ftop = cells.walk_geometry(gi, cellz, dim)
+    per, m0, m1, m2, W, fw, flo, ftop = cells.walk_geometry(gi, cellz, dim)
     pstart = cells.level_starts(gi, dim)
     assert per == line
     scale = rng.choice([0.5, 3.0, 15.0, 60.0, 200.0], 20000)
@@ -99,7 +99,7 @@ def test_walk_bound_is_map_dist(dim, line):
         w = np.r_[x, np.zeros(3 - dim)]
         want = cells.map_dist(w, dim, size, gi, words, start, blocks, cellz, field)
         moved = w.copy()
-        got = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, etop, unit,
+        got = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw,
                                flo, ftop, pstart)
         assert got == want, (x, got, want)
         if line:

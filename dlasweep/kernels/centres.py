@@ -10,8 +10,10 @@ A coarse cell is held when a particle lies in it. Each level above, cells
 ``2**PYRAMID_STEP`` times wider, holds the distance from its cells' centres to
 the nearest held cell of the level below, to ``FCAP`` cells
 (``pyramid_lower``, where a cell below is newly held). Less a walker's way to
-the centre of its cell (``centre_gap``), each bounds its distance
-(``pyramid_dist`` above the field). Values are stored as the cap less the
+a cell's centre, each cell's value bounds the walker's distance: the centre
+field's, from the ``2**dim`` cells about the walker (``centre_bound``), the
+pyramid's above it, from the walker's own (``centre_gap``, ``pyramid_dist``).
+Values are stored as the cap less the
 distance, so that an unwritten page means the cap and costs no memory; the
 levels share one array laid out by ``maps.pyramid_starts``.
 """
@@ -20,7 +22,7 @@ import math
 
 import numpy as np
 
-from .._jit import borrow, jit
+from .._jit import borrow, inline, jit
 from . import maps
 
 FS = maps.FIELD_SHIFT
@@ -198,6 +200,64 @@ def centre_gap(X0, X1, X2, dim, shift):
     d1 = X1 - float((int(X1) >> shift) << shift) - h
     d2 = X2 - float((int(X2) >> shift) << shift) - h if dim == 3 else 0.0
     return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+@inline
+def centre_bound(field, dim, fw, X0, X1, X2):
+    """The centre field's value at grid point X's coarse cell (0: at the cap), and
+    its lower bound on the distance from X to every particle centre: the largest,
+    over the ``2**dim`` coarse cells whose centres surround X, of a cell's distance
+    (a capped cell's: the cap's, ``field_reach``) less X's way to its centre.
+
+    Each cell's centre gives a bound (the distance is 1-Lipschitz); X's own alone
+    is loose by up to half a cell's diagonal, and near the cluster every jump is
+    shorter for it: 2D 1e6 (4 seeds side by side) 55.0 walk steps a particle
+    against 48.5 with the surrounding centres, 1e7 60.6 against 54.6; 3D 1e7 137.3
+    against 119.4. The same above the field (``pyramid_dist``) took fewer steps
+    (2D 1e6: 46.3) but more time (1.05 to 1.15 times), and is not done.
+    """
+    side = float(1 << FS)
+    scale, top = 1.0 / CENTRE_UNITS[dim], CENTRE_TOP[dim]
+    e = np.int64(field[maps.field_cell(dim, fw, int(X0) >> FS, int(X1) >> FS, int(X2) >> FS)])
+    # the cells c..c + 1 on each axis, inside the field (fw >= 2: the grid is wider than a cell)
+    c0 = min(max(int(X0 / side - 0.5), 0), fw - 2)
+    c1 = min(max(int(X1 / side - 0.5), 0), fw - 2)
+    c2 = min(max(int(X2 / side - 0.5), 0), fw - 2) if dim == 3 else 0
+    t = maps.FIELD_TILE[dim]
+    last = (1 << t) - 1
+    inside = (c0 & last) != last and (c1 & last) != last and (dim == 2 or (c2 & last) != last)
+    f000 = maps.field_cell(dim, fw, c0, c1, c2)
+    if inside:  # within one tile a step along an axis is a fixed stride
+        f100, f010, f110 = f000 + 1, f000 + (1 << t), f000 + 1 + (1 << t)
+    else:
+        f100 = maps.field_cell(dim, fw, c0 + 1, c1, c2)
+        f010 = maps.field_cell(dim, fw, c0, c1 + 1, c2)
+        f110 = maps.field_cell(dim, fw, c0 + 1, c1 + 1, c2)
+    g0 = X0 - side * (c0 + 0.5)
+    g1 = X1 - side * (c1 + 0.5)
+    g2 = X2 - side * (c2 + 0.5) if dim == 3 else 0.0
+    a0, b0 = g0 * g0, (g0 - side) * (g0 - side)
+    a1, b1 = g1 * g1, (g1 - side) * (g1 - side)
+    a2, b2 = g2 * g2, (g2 - side) * (g2 - side)
+    best = max(max((top - np.int64(field[f000])) * scale - np.sqrt(a0 + a1 + a2),
+                   (top - np.int64(field[f100])) * scale - np.sqrt(b0 + a1 + a2)),
+               max((top - np.int64(field[f010])) * scale - np.sqrt(a0 + b1 + a2),
+                   (top - np.int64(field[f110])) * scale - np.sqrt(b0 + b1 + a2)))
+    if dim == 3:
+        if inside:
+            up = 1 << (2 * t)
+            f001, f101, f011, f111 = f000 + up, f100 + up, f010 + up, f110 + up
+        else:
+            f001 = maps.field_cell(dim, fw, c0, c1, c2 + 1)
+            f101 = maps.field_cell(dim, fw, c0 + 1, c1, c2 + 1)
+            f011 = maps.field_cell(dim, fw, c0, c1 + 1, c2 + 1)
+            f111 = maps.field_cell(dim, fw, c0 + 1, c1 + 1, c2 + 1)
+        best = max(best,
+                   max(max((top - np.int64(field[f001])) * scale - np.sqrt(a0 + a1 + b2),
+                           (top - np.int64(field[f101])) * scale - np.sqrt(b0 + a1 + b2)),
+                       max((top - np.int64(field[f011])) * scale - np.sqrt(a0 + b1 + b2),
+                           (top - np.int64(field[f111])) * scale - np.sqrt(b0 + b1 + b2))))
+    return e, best
 
 
 @borrow

@@ -12,10 +12,11 @@ Two particles touch when their centres are exactly one diameter apart.
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
 uniformly onto the sphere whose radius is a lower bound on its free
 distance: near the cluster the centre field (the distance from the centre
-of the walker's coarse cell to the nearest particle's unit cell, less the
-walker's way to that centre), further out the centre pyramid (the same, from
-the centres of ever coarser cells to the nearest held cell of the level
-below), at contact
+of a coarse cell to the nearest particle's unit cell, less the walker's way
+to that centre, the largest over the cells whose centres surround the
+walker), further out the centre pyramid (the same from the centre of the
+walker's own cell, for ever coarser cells to the nearest held cell of the
+level below), at contact
 range and beside periodic sides the largest clear level of the dilated
 maps, and the bounding circle of the cluster. Outside the launch
 circle it returns exactly (``walk.return_to_sphere``; above a substrate's

@@ -30,12 +30,10 @@ from ..model import GRID_GROWTH
 from ..centres import (
     CCAP,
     CENTRE_OWN,
-    CENTRE_TOP,
-    CENTRE_UNITS,
     FCAP,
     FS,
     _centre_lower,
-    centre_gap,
+    centre_bound,
     pyramid_dist,
     pyramid_lower,
 )
@@ -458,8 +456,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
         return -1.0
     i0, i1, i2 = int(X0), int(X1), int(X2)
     fw = (W + (1 << FS) - 1) >> FS
-    e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-    dm = (CENTRE_TOP[dim] - e) * (1.0 / CENTRE_UNITS[dim]) - centre_gap(X0, X1, X2, dim, FS)
+    e, dm = centre_bound(field, dim, fw, X0, X1, X2)
     if e > 0 and dm > NEAR:
         return dm
     if e == 0 and gi[PYRAMID_LEVELS] > 1:
@@ -490,8 +487,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 @jit
 def walk_geometry(gi, cells, dim):
     """The grid's scalar constants that ``walk_bound`` takes, worked out once per walk:
-    (periodic, m0, m1, m2, W, fw, etop, unit, flo, ftop): ``etop`` the
-    centre field's cap in its units, ``unit`` a unit in sites. (The centre pyramid's
+    (periodic, m0, m1, m2, W, fw, flo, ftop). (The centre pyramid's
     level starts, an array, come from
     ``level_starts`` once per grid: the walk allocates nothing.)"""
     ftop = min(len(cells) - 1, gi[TOP_LEVEL]) + 1
@@ -502,7 +498,7 @@ def walk_geometry(gi, cells, dim):
         flo += 1
     fw = (gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
     return (gi[PERIODIC] == 1, float(gi[MAP_OFFSET]), float(gi[MAP_OFFSET + 1]), float(gi[MAP_OFFSET + 2]), float(gi[MAP_WIDTH]), fw,
-            CENTRE_TOP[dim], 1.0 / CENTRE_UNITS[dim], flo, ftop)
+            flo, ftop)
 
 
 @jit
@@ -512,7 +508,7 @@ def level_starts(gi, dim):
 
 
 @jit
-def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, etop, unit, flo, ftop, pstart):
+def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop, pstart):
     """``map_dist`` as the walk's hot loop computes it: the grid's constants
     from ``walk_geometry``, and w's periodic coordinates wrapped in place.
 
@@ -541,8 +537,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     dm = -1.0
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
-        e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-        dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim, FS)
+        e, dm = centre_bound(field, dim, fw, X0, X1, X2)
         lo, hi = 0, 0
         if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
             dm = 0.0

@@ -37,7 +37,7 @@ from .cells import (
     sort_cells,
     walk_geometry,
 )
-from ..centres import FS, centre_gap, pyramid_dist
+from ..centres import FS, centre_bound, pyramid_dist
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -148,7 +148,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
     RL2 = RL * RL
     up = dim - 1
     r_max, extent, h_max = geo[0], geo[1], geo[2]
-    per, m0, m1, m2, W, fw, etop, unit, flo, ftop = walk_geometry(gi, cells, dim)
+    per, m0, m1, m2, W, fw, flo, ftop = walk_geometry(gi, cells, dim)
     s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
     code = 0
     r2, ch, ggeo = 0.0, 0.0, 0.0
@@ -232,8 +232,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                 dm = -1.0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    e = np.int64(field[maps.field_cell(dim, fw, i0 >> FS, i1 >> FS, i2 >> FS)])
-                    dm = (etop - e) * unit - centre_gap(X0, X1, X2, dim, FS)
+                    e, dm = centre_bound(field, dim, fw, X0, X1, X2)
                     lo, hi = 0, 0
                     if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
                         dm = 0.0
