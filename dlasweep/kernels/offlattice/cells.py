@@ -433,8 +433,8 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     centre field and the maps.
 
     The centre field puts every particle centre its value (``_centre_lower``)
-    from w's coarse cell's centre, so that less w's distance to that centre
-    bounds it. Where that says little (``NEAR`` or less, or at the field's cap),
+    from a coarse cell's centre, so that less w's distance to that centre
+    bounds it: the largest such bound of the cells about w (``centres.centre_bound``). Where that says little (``NEAR`` or less, or at the field's cap),
     the largest clear map level s puts every particle outside the 3**dim block
     of level-s cells around w: 2**s plus w's distance to its level-s cell's
     faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
