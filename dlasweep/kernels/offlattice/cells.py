@@ -434,8 +434,9 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 
     The centre field puts every particle centre its value (``_centre_lower``)
     from a coarse cell's centre, so that less w's distance to that centre
-    bounds it: the largest such bound of the cells about w (``centres.centre_bound``). Where that says little (``NEAR`` or less, or at the field's cap),
-    the largest clear map level s puts every particle outside the 3**dim block
+    bounds it: the largest such bound of the cells about w
+    (``centres.centre_bound``). Where that says little (``NEAR`` or less, or at
+    the field's cap), the largest clear map level s puts every particle outside the 3**dim block
     of level-s cells around w: 2**s plus w's distance to its level-s cell's
     faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
     map. At the field's cap, away from periodic sides, the centre pyramid
