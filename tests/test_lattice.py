@@ -133,7 +133,7 @@ def test_symmetries_are_the_whole_group(dim):
 
 def test_fine_distance_matches_brute_force_3d():
     """``fine3`` (word masks) against the Chebyshev distance to every particle,
-    capped at 5, on a grid of 3 tiles a side: its words read within one tile,
+    capped at 5, with and without a lower bound, on a grid of 3 tiles a side: its words read within one tile,
     across tiles and at the grid's faces."""
     rng = np.random.default_rng(0)
     width = 3 * 4 << maps.TILE_BITS[3]
@@ -146,7 +146,9 @@ def test_fine_distance_matches_brute_force_3d():
             cube = np.zeros(27, np.uint64)
             for q in rng.integers(0, width, (50, 3)):
                 d = np.abs(pts - q).max(1).min() if len(pts) else 5
-                assert fine3(words, blocks[0], q[0], q[1], q[2], cube) == min(d, 5)
+                assert fine3(words, blocks[0], q[0], q[1], q[2], cube, 0) == min(d, 5)
+                # told a lower bound that holds, as the walk tells it 3 beyond a clear level-1 cell
+                assert fine3(words, blocks[0], q[0], q[1], q[2], cube, min(d, 3)) == min(d, 5)
 
 
 def _random_points(rng, dim, width, density):

@@ -284,7 +284,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
                     word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                 )
             else:
-                d = fine3(words, nb0, i, j, k, cube)
+                d = fine3(words, nb0, i, j, k, cube, 3)
     return d, far
 
 
@@ -469,7 +469,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
                             word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                         )
                     else:
-                        d = fine3(words, nb0, i, j, k, cube)
+                        d = fine3(words, nb0, i, j, k, cube, 3)
             # <<< _distance_bound
             if d == 0 or (line and q[up] <= 1):
                 # >>> touches, then step_to, spelled out: calls that pass arrays

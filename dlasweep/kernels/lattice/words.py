@@ -167,13 +167,15 @@ def _masks(x, r, width, repeat):
 
 
 @jit
-def fine3(words, nb, i, j, k, cube):
-    """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5.
+def fine3(words, nb, i, j, k, cube, least):
+    """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5,
+    known to be at least ``least``.
 
     The 3x3x3 words (4x4x4 sites each, bit x + 4 y + 16 z) around the
     walker's cover 4 sites on every side; the cube of half-width r is hit
     when a word AND-ed with the masks of its x, y and z ranges is nonzero.
-    Whole words at a time, and a bisection over r: three rounds at most.
+    Whole words at a time, and a bisection over r from ``least``: the walk
+    knows 3 (a clear level-1 cell), which leaves two rounds at most, not three.
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
     inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
@@ -201,7 +203,7 @@ def fine3(words, nb, i, j, k, cube):
     x = (i & 3) + 4
     y = (j & 3) + 4
     z = (k & 3) + 4
-    lo, hi = 0, 5  # the distance (5: none within 4) is in lo..hi
+    lo, hi = least, 5  # the distance (5: none within 4) is in lo..hi
     while lo < hi:
         r = (lo + hi) >> 1
         mx0, mx1, mx2 = _masks(x, r, 1, 0x1111111111111111)
