@@ -245,7 +245,7 @@ def _release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
 
 
 @borrow
-def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0, cap, i, j, k):
+def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, i, j, k):
     """Lower bounds of the distance from grid site (i, j, k) to the cluster:
     Chebyshev, 0 when a particle may lie within two sites, and Euclidean from
     beyond the field's reach, 0 within it.
@@ -254,7 +254,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
     ``fine3``), else the coarse field's (whole cells of ``2**FIELD_SHIFT``
     between), 5 off the grid; where the field is at its cap, the centre pyramid
     above it bounds the Euclidean distance (``centres.pyramid_dist``). ``_grow``
-    holds a copy of this body, spelled out. ``cube`` (27,) is working space.
+    holds a copy of this body, spelled out.
 
     Returns
     -------
@@ -284,7 +284,7 @@ def _distance_bound(words, field, levels, cube, dim, width, nb0, base1, nb1, fw0
                     word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                 )
             else:
-                d = fine3(words, nb0, i, j, k, cube, 3)
+                d = fine3(words, nb0, i, j, k)
     return d, far
 
 
@@ -366,7 +366,6 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
     fw0 = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT  # the field's side
     nb0, base1, nb1 = blocks[0], start[1], blocks[1]
     nm = moves.shape[0]
-    cube = np.zeros(27, np.uint64)
     pos = np.zeros(3)
     q = np.zeros(3, np.int64)
     scratch = np.zeros(3)
@@ -469,7 +468,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
                             word_at(words, 2, nb0, bx + 1, by + 1, 0), i & 7, j & 7,
                         )
                     else:
-                        d = fine3(words, nb0, i, j, k, cube, 3)
+                        d = fine3(words, nb0, i, j, k)
             # <<< _distance_bound
             if d == 0 or (line and q[up] <= 1):
                 # >>> touches, then step_to, spelled out: calls that pass arrays

@@ -167,15 +167,17 @@ def _masks(x, r, width, repeat):
 
 
 @jit
-def fine3(words, nb, i, j, k, cube, least):
+def fine3(words, nb, i, j, k):
     """Chebyshev distance from site (i, j, k) to the nearest particle, capped at 5,
-    known to be at least ``least``.
+    where it is known to be 3 or more (the walk's clear level-1 cell).
 
     The 3x3x3 words (4x4x4 sites each, bit x + 4 y + 16 z) around the
     walker's cover 4 sites on every side; the cube of half-width r is hit
     when a word AND-ed with the masks of its x, y and z ranges is nonzero.
-    Whole words at a time, and a bisection over r from ``least``: the walk
-    knows 3 (a clear level-1 cell), which leaves two rounds at most, not three.
+    One pass over the words tests half-widths 3 and 4 at once. Against it,
+    side by side (3D 1e5, 8 seeds, four rounds), a bisection over words
+    gathered first took 1.02 to 1.12 times the growth's time from 3 (two
+    rounds at most) and, before that, from 0 (three) 1.02 to 1.09 times more.
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
     inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
@@ -186,9 +188,21 @@ def fine3(words, nb, i, j, k, cube, least):
     first = np.uint64(0)  # word (bx - 1, by - 1, bz - 1)
     if one_tile:
         first = np.uint64(maps.block_word(3, 0, nb, bx, by, bz) - 1 - (1 << t) - (1 << (2 * t)))
-    any_set = np.uint64(0)
+    x, y, z = (i & 3) + 4, (j & 3) + 4, (k & 3) + 4
+    ax0, ax1, ax2 = _masks(x, 3, 1, 0x1111111111111111)
+    ay0, ay1, ay2 = _masks(y, 3, 4, 0x0001000100010001)
+    az0, az1, az2 = _masks(z, 3, 16, 1)
+    bx0, bx1, bx2 = _masks(x, 4, 1, 0x1111111111111111)
+    by0, by1, by2 = _masks(y, 4, 4, 0x0001000100010001)
+    bz0, bz1, bz2 = _masks(z, 4, 16, 1)
+    hit3 = np.uint64(0)
+    hit4 = np.uint64(0)
     for c in range(3):
+        az = az0 if c == 0 else (az1 if c == 1 else az2)
+        bz_ = bz0 if c == 0 else (bz1 if c == 1 else bz2)
         for b in range(3):
+            ayz = az & (ay0 if b == 0 else (ay1 if b == 1 else ay2))
+            byz = bz_ & (by0 if b == 0 else (by1 if b == 1 else by2))
             for a in range(3):
                 if one_tile:
                     w = words[first + np.uint64(a + (b << t) + (c << (2 * t)))]
@@ -196,28 +210,6 @@ def fine3(words, nb, i, j, k, cube, least):
                     w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
                 else:
                     w = word_at(words, 3, nb, bx + a - 1, by + b - 1, bz + c - 1)
-                cube[a + 3 * (b + 3 * c)] = w
-                any_set |= w
-    if any_set == 0:
-        return 5
-    x = (i & 3) + 4
-    y = (j & 3) + 4
-    z = (k & 3) + 4
-    lo, hi = least, 5  # the distance (5: none within 4) is in lo..hi
-    while lo < hi:
-        r = (lo + hi) >> 1
-        mx0, mx1, mx2 = _masks(x, r, 1, 0x1111111111111111)
-        my0, my1, my2 = _masks(y, r, 4, 0x0001000100010001)
-        mz0, mz1, mz2 = _masks(z, r, 16, 1)
-        hit = np.uint64(0)
-        for c in range(3):
-            mz = mz0 if c == 0 else (mz1 if c == 1 else mz2)
-            for b in range(3):
-                myz = mz & (my0 if b == 0 else (my1 if b == 1 else my2))
-                w = 3 * (b + 3 * c)
-                hit |= myz & ((cube[w] & mx0) | (cube[w + 1] & mx1) | (cube[w + 2] & mx2))
-        if hit != 0:
-            hi = r
-        else:
-            lo = r + 1
-    return lo
+                hit3 |= w & ayz & (ax0 if a == 0 else (ax1 if a == 1 else ax2))
+                hit4 |= w & byz & (bx0 if a == 0 else (bx1 if a == 1 else bx2))
+    return 3 if hit3 != 0 else (4 if hit4 != 0 else 5)
