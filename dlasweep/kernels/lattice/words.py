@@ -189,20 +189,21 @@ def fine3(words, nb, i, j, k):
     if one_tile:
         first = np.uint64(maps.block_word(3, 0, nb, bx, by, bz) - 1 - (1 << t) - (1 << (2 * t)))
     x, y, z = (i & 3) + 4, (j & 3) + 4, (k & 3) + 4
-    ax0, ax1, ax2 = _masks(x, 3, 1, 0x1111111111111111)
-    ay0, ay1, ay2 = _masks(y, 3, 4, 0x0001000100010001)
-    az0, az1, az2 = _masks(z, 3, 16, 1)
-    bx0, bx1, bx2 = _masks(x, 4, 1, 0x1111111111111111)
-    by0, by1, by2 = _masks(y, 4, 4, 0x0001000100010001)
-    bz0, bz1, bz2 = _masks(z, 4, 16, 1)
+    # x30, x31, x32: the sites within 3 of x along x in the three words' columns; and so on
+    x30, x31, x32 = _masks(x, 3, 1, 0x1111111111111111)
+    y30, y31, y32 = _masks(y, 3, 4, 0x0001000100010001)
+    z30, z31, z32 = _masks(z, 3, 16, 1)
+    x40, x41, x42 = _masks(x, 4, 1, 0x1111111111111111)
+    y40, y41, y42 = _masks(y, 4, 4, 0x0001000100010001)
+    z40, z41, z42 = _masks(z, 4, 16, 1)
     hit3 = np.uint64(0)
     hit4 = np.uint64(0)
     for c in range(3):
-        az = az0 if c == 0 else (az1 if c == 1 else az2)
-        bz_ = bz0 if c == 0 else (bz1 if c == 1 else bz2)
+        z3 = z30 if c == 0 else (z31 if c == 1 else z32)
+        z4 = z40 if c == 0 else (z41 if c == 1 else z42)
         for b in range(3):
-            ayz = az & (ay0 if b == 0 else (ay1 if b == 1 else ay2))
-            byz = bz_ & (by0 if b == 0 else (by1 if b == 1 else by2))
+            yz3 = z3 & (y30 if b == 0 else (y31 if b == 1 else y32))
+            yz4 = z4 & (y40 if b == 0 else (y41 if b == 1 else y42))
             for a in range(3):
                 if one_tile:
                     w = words[first + np.uint64(a + (b << t) + (c << (2 * t)))]
@@ -210,6 +211,6 @@ def fine3(words, nb, i, j, k):
                     w = words[maps.block_word(3, 0, nb, bx + a - 1, by + b - 1, bz + c - 1)]
                 else:
                     w = word_at(words, 3, nb, bx + a - 1, by + b - 1, bz + c - 1)
-                hit3 |= w & ayz & (ax0 if a == 0 else (ax1 if a == 1 else ax2))
-                hit4 |= w & byz & (bx0 if a == 0 else (bx1 if a == 1 else bx2))
+                hit3 |= w & yz3 & (x30 if a == 0 else (x31 if a == 1 else x32))
+                hit4 |= w & yz4 & (x40 if a == 0 else (x41 if a == 1 else x42))
     return 3 if hit3 != 0 else (4 if hit4 != 0 else 5)
