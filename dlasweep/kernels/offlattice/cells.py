@@ -435,10 +435,10 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     The centre field puts every particle centre its value (``_centre_lower``)
     from a coarse cell's centre, so that less w's distance to that centre
     bounds it: the largest such bound of the cells about w
-    (``centres.centre_bound``). Where that says little (``NEAR`` or less, or at
-    the field's cap), the largest clear map level s puts every particle outside the 3**dim block
-    of level-s cells around w: 2**s plus w's distance to its level-s cell's
-    faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
+    (``centres.centre_bound``). Where that says little (``NEAR`` or less, or
+    at the field's cap), the largest clear map level s puts every particle
+    outside the 3**dim block of level-s cells around w: 2**s plus w's
+    distance to its level-s cell's faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
     map. At the field's cap, away from periodic sides, the centre pyramid
     above the field bounds instead of the maps (``pyramid_dist``). (``_walk``
     spells this out inline.)
@@ -498,8 +498,8 @@ def walk_geometry(gi, cells, dim):
     while flo + 1 < ftop and (2 << (flo + 1)) <= (CCAP[dim - 2] - 1) << FS:
         flo += 1
     fw = (gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
-    return (gi[PERIODIC] == 1, float(gi[MAP_OFFSET]), float(gi[MAP_OFFSET + 1]), float(gi[MAP_OFFSET + 2]), float(gi[MAP_WIDTH]), fw,
-            flo, ftop)
+    return (gi[PERIODIC] == 1, float(gi[MAP_OFFSET]), float(gi[MAP_OFFSET + 1]), float(gi[MAP_OFFSET + 2]),
+            float(gi[MAP_WIDTH]), fw, flo, ftop)
 
 
 @jit
