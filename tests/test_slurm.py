@@ -290,7 +290,7 @@ def test_the_quick_spec_on_slurm_equals_the_embedded_run(queue, tmp_path, quick_
 def test_a_cancelled_worker_job_is_replaced_and_the_sweep_finishes(queue, tmp_path, slow_reference):
     spec = tmp_path / "slow.toml"
     spec.write_text(SLOW_SPEC)
-    with Launcher(queue, tmp_path, spec, "--max-jobs", "1") as run:
+    with Launcher(queue, tmp_path, spec, "--max-jobs", "1", "--cores", "1") as run:  # one core: see the Ctrl-C test
         wait_for(lambda: run.finished_tasks() >= 1, "a first finished task", timeout=120)
         before = run.finished_tasks()
         queue.run("scancel", run.submitted()[0])
@@ -336,7 +336,7 @@ def test_sigterm_in_a_queue_wait_exits_143_and_cancels_the_waiting_job(queue, tm
 def test_ctrl_c_mid_sweep_exits_130_keeps_finished_tasks_and_resume_completes(queue, tmp_path, slow_reference):
     spec = tmp_path / "slow.toml"
     spec.write_text(SLOW_SPEC)
-    # One thread: the seven clusters after the first take about 10 s, not 5; with two, on CI's loaded
+    # One core: the seven clusters after the first take about 10 s, not 5; with two, on CI's loaded
     # 2 cores, the Ctrl-C once landed after the sweep had ended.
     with Launcher(queue, tmp_path, spec, "--cores", "1") as run:
         wait_for(lambda: finished_clusters(run.out), "a first saved cluster", timeout=120)
