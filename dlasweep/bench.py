@@ -27,6 +27,8 @@ MIB = "2^20 byte"
 
 BENCH_SCHEMA = {
     "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
+    "seconds_low": Variable(("run",), np.float64, "s", "fastest of the repeated runs of this model, method and N"),
+    "seconds_high": Variable(("run",), np.float64, "s", "slowest of the repeated runs of this model, method and N"),
     "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
     "walk_steps": Variable(("run",), np.int64, "1", "walk steps and jumps in all"),
     # MiB, in words udunits reads
@@ -77,7 +79,12 @@ STEPS_GROWTH_TARGET = 1.40
 REPEATS = 3
 """Fresh runs of each N below ``FULL_COUNT``, of which the bench keeps the median time: one
 2D off-lattice cluster of 1e5 took 0.543, 0.434 and 0.460 s in three runs on one machine,
-enough to move a cost exponent from 1e5 to 1e7 by 0.03."""
+enough to move a cost exponent from 1e5 to 1e7 by 0.03. With ``FULL_COUNT``, the first N of
+``SCALING`` runs as often again after it, so that its runs bracket the long one: a 2D lattice
+cluster of 1e5 took 0.38 to 0.55 s in six runs within a minute on one machine, and the host's
+speed drifts over the minutes between a model's first runs and its last. The cost exponent is
+given with the range its fit takes from the fastest and slowest runs of each N
+(``cost_exponent_range``)."""
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
 
@@ -132,12 +139,12 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     echo : callable
         Receives one line per measurement as it finishes.
     """
-    rows = []
     plan = []
     for name, params in MODELS.items():
         full = full or huge
         counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
         counts += [HUGE_COUNT] if huge and "2d" in name else []
+        counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
         plan += [(name, "exact", params, n) for n in counts]
     naive_counts = [QUICK_COUNT // 4] if quick else NAIVE_COUNTS
     for n in naive_counts:
@@ -148,12 +155,16 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
          f"{'peak MB':>9}{'added MB':>10}")
     ends = {}
+    runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
-        runs = sorted((probe(params, n) for _ in range(1 if quick or n >= FULL_COUNT else REPEATS)),
-                      key=lambda run: run["seconds"])
-        r = runs[len(runs) // 2]
-        r.update(model=name, method=method, n=n)
-        rows.append(r)
+        again = (name, method, n) in runs
+        runs.setdefault((name, method, n), []).extend(
+            probe(params, n) for _ in range(1 if quick or n >= FULL_COUNT else REPEATS))
+        r = _median_run(runs[name, method, n])
+        if again:
+            echo(f"{name}: {n} again after the rest, {len(runs[name, method, n])} runs from "
+                 f"{r['seconds_low']:.3f} to {r['seconds_high']:.3f} s, median {r['seconds']:.3f} s")
+            continue
         echo(
             f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
             f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
@@ -163,6 +174,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
             with tempfile.TemporaryDirectory() as scratch:
                 ends[name] = end_to_end(params, n, r["peak_mb"], scratch)
             echo(_end_to_end_line(name, n, ends[name]))
+    rows = [{**_median_run(each), "model": name, "method": method, "n": n} for (name, method, n), each in runs.items()]
     ds = _to_dataset(rows)
     for name, figures in ends.items():
         ds.attrs.update({f"end_to_end_{name.replace('-', '_')}_{key}": value for key, value in figures.items()})
@@ -172,9 +184,10 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         if fitted is not None:
             slope, lo, hi = fitted
             parts = exponent_parts(exact)
+            ranged = dict(zip(("low", "high"), cost_exponent_range(exact)))
             ds.attrs[exponent_attribute(name)] = slope
-            ds.attrs.update({exponent_attribute(name, part): value for part, value in parts.items()})
-            echo(_exponent_line(name, slope, lo, hi, parts))
+            ds.attrs.update({exponent_attribute(name, part): value for part, value in {**parts, **ranged}.items()})
+            echo(_exponent_line(name, slope, lo, hi, parts, ranged))
     for n in naive_counts:
         sel = ds.where(ds.n == n, drop=True)
         t = {str(m): float(s) for m, s in zip(sel.method.values, sel.seconds.values)}
@@ -187,9 +200,16 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     return ds
 
 
-def _exponent_line(name, slope, lo, hi, parts) -> str:
-    """One line: the cost exponent and its parts (``exponent_parts``)."""
-    return (f"{name}: time grows as N^{slope:.2f} from {power_label(lo)} to {power_label(hi)}: N particles "
+def _median_run(runs) -> dict:
+    """The run of median time among ``runs``, with the fastest and slowest times of them all."""
+    ordered = sorted(runs, key=lambda run: run["seconds"])
+    return {**ordered[len(ordered) // 2], "seconds_low": ordered[0]["seconds"], "seconds_high": ordered[-1]["seconds"]}
+
+
+def _exponent_line(name, slope, lo, hi, parts, ranged) -> str:
+    """One line: the cost exponent, its range (``cost_exponent_range``) and its parts (``exponent_parts``)."""
+    return (f"{name}: time grows as N^{slope:.2f} [{ranged['low']:.2f}, {ranged['high']:.2f}] from "
+            f"{power_label(lo)} to {power_label(hi)}: N particles "
             f"x N^{parts['steps']:.3f} steps a particle x N^{parts['step_cost']:.3f} ns a step")
 
 
@@ -249,8 +269,9 @@ def target_table(ds: xr.Dataset) -> list[str]:
             row += ["", ""]
         else:
             slope = cost_exponent(exact)[0]
+            low, high = cost_exponent_range(exact)
             growth = (float(last.walk_steps) / float(last.n_grown)) / (float(first.walk_steps) / float(first.n_grown))
-            row += [f"{slope:.2f}{_verdict(slope, target['exponent'])}",
+            row += [f"{slope:.2f} [{low:.2f}, {high:.2f}]{_verdict(slope, target['exponent'])}",
                     f"{growth:.2f}{_verdict(growth, STEPS_GROWTH_TARGET)}"]
         lines.append("| " + " | ".join(row) + " |")
     return lines
@@ -268,6 +289,20 @@ def cost_exponent(exact: xr.Dataset) -> tuple[float, int, int] | None:
     if len(np.unique(n)) < 2:
         return None
     return _slope(fit, fit.seconds), int(n.min()), int(n.max())
+
+
+def cost_exponent_range(exact: xr.Dataset) -> tuple[float, float]:
+    """The lowest and highest slopes ``cost_exponent``'s fit takes with each N's fastest or slowest run.
+
+    The least-squares slope is a weighted sum of the log times, with weights of the sign of log N
+    less its mean: the lowest takes the slowest runs below the mean and the fastest above it; the
+    highest the other way round. The host's noise over the bench, not an error of the law.
+    """
+    fit = _in_scaling(exact)
+    above = np.log(fit.n.values.astype(float)) > np.log(fit.n.values.astype(float)).mean()
+    lowest = xr.where(above, fit.seconds_low, fit.seconds_high)
+    highest = xr.where(above, fit.seconds_high, fit.seconds_low)
+    return _slope(fit, lowest), _slope(fit, highest)
 
 
 def exponent_parts(exact: xr.Dataset) -> dict[str, float]:
@@ -292,13 +327,16 @@ def _slope(fit: xr.Dataset, values: xr.DataArray) -> float:
 
 def exponent_attribute(model: str, part: str = "") -> str:
     """The global attribute holding ``model``'s cost exponent, ``cost_exponent_lattice_2d`` (CF: no
-    hyphens), or one of its ``exponent_parts``: ``cost_exponent_steps_lattice_2d``."""
+    hyphens), one of its ``exponent_parts``, ``cost_exponent_steps_lattice_2d``, or an end of its range
+    (``cost_exponent_range``), ``cost_exponent_low_lattice_2d``."""
     return f"cost_exponent_{part + '_' if part else ''}{model.replace('-', '_')}"
 
 
 def _to_dataset(rows) -> xr.Dataset:
     """The measurements as a Dataset on ``run``, laid out and described by ``BENCH_SCHEMA``."""
     keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
+    # a row of one run: its time is the fastest and the slowest
+    rows = [{"seconds_low": r["seconds"], "seconds_high": r["seconds"], **r} for r in rows]
     columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype))
                for name, var in BENCH_SCHEMA.items()}
     coords = ("model", "method", "n")

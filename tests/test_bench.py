@@ -1,5 +1,6 @@
 """The benchmark runs end to end (its numbers are for people, not for asserts)."""
 
+import pytest
 import xarray as xr
 
 from dlasweep.cli import main
@@ -54,7 +55,7 @@ def test_target_table_compares_each_figure_with_its_target():
     assert lattice[1] == "502.4 (<= 60: 737% over)"
     assert lattice[2] == ""  # no 1e8 run
     assert lattice[3] == "10.5 (<= 24: met)"
-    assert lattice[5] == "1.20 (<= 1.06: 13% over)"
+    assert lattice[5] == "1.20 [1.20, 1.20] (<= 1.06: 13% over)"  # one run each: no range
     assert lattice[6] == "1.44 (<= 1.4: 3% over)"
     assert _verdict(130.6, 130) == " (<= 130: 0.5% over)" and _verdict(130, 130) == " (<= 130: met)"
     assert table["offlattice-3d"][1] == "250.0 (<= 300: met)"
@@ -73,7 +74,7 @@ def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
     ds = _to_dataset(rows)
     slope, lo, hi = cost_exponent(ds)
     assert (round(slope, 6), lo, hi) == (1.2, 10**5, 10**7)
-    assert target_table(ds)[2].split(" | ")[5] == "1.20 (<= 1.06: 13% over)"
+    assert target_table(ds)[2].split(" | ")[5] == "1.20 [1.20, 1.20] (<= 1.06: 13% over)"
     assert cost_exponent(_to_dataset(rows[:3])) is None  # one N in range: no slope
 
 
@@ -93,9 +94,59 @@ def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
     slope, lo, hi = cost_exponent(ds)
     parts = exponent_parts(ds)
     assert abs(1 + parts["steps"] + parts["step_cost"] - slope) < 1e-9 and abs(parts["step_cost"] - 0.15) > 0.01
-    assert _exponent_line("offlattice-3d", slope, lo, hi, parts) == (
-        f"offlattice-3d: time grows as N^{slope:.2f} from 1e5 to 1e7: N particles x N^0.050 steps a particle "
-        f"x N^{parts['step_cost']:.3f} ns a step")
+    assert _exponent_line("offlattice-3d", slope, lo, hi, parts, {"low": 1.1, "high": 1.3}) == (
+        f"offlattice-3d: time grows as N^{slope:.2f} [1.10, 1.30] from 1e5 to 1e7: N particles x N^0.050 steps "
+        f"a particle x N^{parts['step_cost']:.3f} ns a step")
+
+
+def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
+    # time as N^1.2; the runs of 1e5 from 0.9 to 1.1 of it, of 1e6 from 0.8 to 1.25 (its weight in the
+    # fit of 1e5, 1e6 and 1e7 is zero), one run of 1e7: the range is the slopes through 1e5's ends
+    import numpy as np
+
+    from dlasweep.bench import _to_dataset, cost_exponent, cost_exponent_range, target_table
+
+    spread = {10**5: (0.9, 1.1), 10**6: (0.8, 1.25), 10**7: (1.0, 1.0)}
+    rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
+             "seconds_low": 2e-6 * n**1.2 * spread[n][0], "seconds_high": 2e-6 * n**1.2 * spread[n][1],
+             "steps": 10 * n, "status": "ok", "peak_mb": 200.0, "added_mb": 1.0} for n in spread]
+    ds = _to_dataset(rows)
+    low, high = cost_exponent_range(ds)
+    assert low == pytest.approx(1.2 - np.log(1.1) / np.log(100)) and high == pytest.approx(1.2 - np.log(0.9) / np.log(100))
+    assert low < cost_exponent(ds)[0] < high
+    assert target_table(ds)[2].split(" | ")[5] == "1.20 [1.18, 1.22] (<= 1.06: 13% over)"
+    single = _to_dataset([{k: v for k, v in row.items() if not k.startswith("seconds_")} for row in rows])
+    assert cost_exponent_range(single) == pytest.approx((1.2, 1.2))  # one run each: no range
+
+
+def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeypatch):
+    # every probe a little slower than the one before (a host that slows down): 1e5's six runs,
+    # three before 1e7 and three after, span the drift, and the median is one of them
+    from dlasweep import bench
+
+    calls = []
+
+    def fake_probe(params, n, seed=1):
+        calls.append((params["model"], params["dim"], n))
+        return {"seconds": 1e-6 * n * (1 + 0.01 * len(calls)), "n_grown": n, "steps": 10 * n, "status": "ok",
+                "peak_mb": 200.0, "added_mb": 1.0}
+
+    monkeypatch.setattr(bench, "probe", fake_probe)
+    lines = []
+    ds = bench.run_bench(full=True, echo=lines.append)
+    lo, hi = bench.SCALING
+    for name, params in bench.MODELS.items():
+        mine = [i for i, call in enumerate(calls) if call[:2] == (params["model"], params["dim"])]
+        firsts = [i for i in mine if calls[i][2] == lo]
+        last = next(i for i in mine if calls[i][2] == hi)
+        assert len(firsts) == 2 * bench.REPEATS and sum(i > last for i in firsts) == bench.REPEATS, name
+        row = ds.where((ds.model == name) & (ds.method == "exact") & (ds.n == lo), drop=True)
+        assert row.sizes["run"] == 1  # one row, of all its runs
+        times = sorted(1e-6 * lo * (1 + 0.01 * (i + 1)) for i in firsts)
+        assert float(row.seconds_low[0]) == times[0] and float(row.seconds_high[0]) == times[-1]
+        assert float(row.seconds[0]) == times[len(times) // 2]
+        assert any(line.startswith(f"{name}: {lo} again after the rest, 6 runs") for line in lines), name
+        assert ds.attrs[bench.exponent_attribute(name, "low")] < ds.attrs[bench.exponent_attribute(name, "high")]
 
 
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():
