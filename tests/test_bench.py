@@ -1,5 +1,6 @@
 """The benchmark runs end to end (its numbers are for people, not for asserts)."""
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -102,8 +103,6 @@ def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
 def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
     # time as N^1.2; the runs of 1e5 from 0.9 to 1.1 of it, of 1e6 from 0.8 to 1.25 (its weight in the
     # fit of 1e5, 1e6 and 1e7 is zero), one run of 1e7: the range is the slopes through 1e5's ends
-    import numpy as np
-
     from dlasweep.bench import _to_dataset, cost_exponent, cost_exponent_range, target_table
 
     spread = {10**5: (0.9, 1.1), 10**6: (0.8, 1.25), 10**7: (1.0, 1.0)}
@@ -112,7 +111,8 @@ def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
              "steps": 10 * n, "status": "ok", "peak_mb": 200.0, "added_mb": 1.0} for n in spread]
     ds = _to_dataset(rows)
     low, high = cost_exponent_range(ds)
-    assert low == pytest.approx(1.2 - np.log(1.1) / np.log(100)) and high == pytest.approx(1.2 - np.log(0.9) / np.log(100))
+    assert low == pytest.approx(1.2 - np.log(1.1) / np.log(100))
+    assert high == pytest.approx(1.2 - np.log(0.9) / np.log(100))
     assert low < cost_exponent(ds)[0] < high
     assert target_table(ds)[2].split(" | ")[5] == "1.20 [1.18, 1.22] (<= 1.06: 13% over)"
     single = _to_dataset([{k: v for k, v in row.items() if not k.startswith("seconds_")} for row in rows])
