@@ -438,10 +438,10 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     (``centres.centre_bound``). Where that says little (``NEAR`` or less, or
     at the field's cap), the largest clear map level s puts every particle
     outside the 3**dim block of level-s cells around w: 2**s plus w's
-    distance to its level-s cell's faces. Returns 0 when the level-1 cell is set (look closer), -1 off the
-    map. At the field's cap, away from periodic sides, the centre pyramid
-    above the field bounds instead of the maps (``pyramid_dist``). (``_walk``
-    spells this out inline.)
+    distance to its level-s cell's faces. Returns 0 when the level-1 cell is
+    set (look closer), -1 off the map. At the field's cap, away from periodic
+    sides, the centre pyramid above the field bounds instead of the maps
+    (``pyramid_dist``). (``_walk`` spells this out inline.)
     """
     W = gi[MAP_WIDTH]
     x0 = w[0]
