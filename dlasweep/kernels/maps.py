@@ -102,7 +102,10 @@ def zeroed(n, dtype):
     numba's ``np.zeros`` writes every byte. Here the whole pages go back to
     the OS (``madvise(MADV_DONTNEED)``), which maps them to zeros on demand:
     a grid over the cluster's bounding square costs the pages the cluster
-    and its walkers write, not the square.
+    and its walkers write, not the square. These pages stay small: with
+    transparent huge pages for every allocation (``always``), side by side
+    with a process that had them turned off, 2D lattice growth of 1e7 took
+    1.06 and 1.26 times the time, 3D lattice of 1e6 1.03 and 1.07.
     """
     a = np.empty(n, dtype)
     lo, hi = _release_pages(np.uintp(a.ctypes.data), np.uintp(a.nbytes))
