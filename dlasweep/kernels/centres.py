@@ -29,7 +29,9 @@ FS = maps.FIELD_SHIFT
 """The centre field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
 FCAP = (16, 6)
 """Cap of the centre pyramid's levels (their cells), 2D and 3D. A newly held cell of
-the level below costs (2 cap - 1)**dim updates, hence 3D's smaller cap.
+the level below costs (2 cap - 1)**dim updates, hence 3D's smaller cap; larger 3D caps
+did not shorten the walk: a 3D lattice cluster of 1e6 (seed 1) took 98.7 steps a
+particle with a cap of 8 and 99.2 with 10, against 99.8 with 6.
 
 The levels hold Euclidean distances from their cells' centres, where the
 Chebyshev pyramid before them held whole cells between cells: the bound far from
