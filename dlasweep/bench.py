@@ -139,9 +139,9 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     echo : callable
         Receives one line per measurement as it finishes.
     """
+    full = full or huge
     plan = []
     for name, params in MODELS.items():
-        full = full or huge
         counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
         counts += [HUGE_COUNT] if huge and "2d" in name else []
         counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
@@ -299,7 +299,8 @@ def cost_exponent_range(exact: xr.Dataset) -> tuple[float, float]:
     highest the other way round. The host's noise over the bench, not an error of the law.
     """
     fit = _in_scaling(exact)
-    above = np.log(fit.n.values.astype(float)) > np.log(fit.n.values.astype(float)).mean()
+    log_n = np.log(fit.n.values.astype(float))
+    above = log_n > log_n.mean()
     lowest = xr.where(above, fit.seconds_low, fit.seconds_high)
     highest = xr.where(above, fit.seconds_high, fit.seconds_low)
     return _slope(fit, lowest), _slope(fit, highest)
