@@ -254,7 +254,10 @@ def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap,
     ``fine3``), else the coarse field's (whole cells of ``2**FIELD_SHIFT``
     between), 5 off the grid; where the field is at its cap, the centre pyramid
     above it bounds the Euclidean distance (``centres.pyramid_dist``). ``_grow``
-    holds a copy of this body, spelled out.
+    holds a copy of this body, spelled out. The pyramid read first after a far
+    jump, and the field's cell only where the pyramid's bound leaves a particle
+    within the field's cap (the same clusters), took 1.010 and 0.984 times the
+    time at 2D 1e7 (seeds 1 and 2, side by side): far jumps do not wait on it.
 
     Returns
     -------
