@@ -45,7 +45,7 @@ def test_summary_gives_each_round_their_mean_and_the_verdict_only_for_the_target
     assert lines[0] == "`cmd`"
     two, three, small = lines[-3].split(" | "), lines[-2].split(" | "), lines[-1].split(" | ")
     assert two[1:4] == ["1e5 to 1e7", "1.040 (0.000), 1.100 (0.000)", "1.070"]
-    assert two[4] == "1.06 (over) |"  # the mean of the rounds, over its target of 1.06
+    assert two[4] == "1.06 (over, rounds on both sides) |"  # the rounds' mean, over its target of 1.06
     assert three[2:5] == ["1.200 (0.060)", "1.200", "1.1 (over) |"]
     assert small[1] == "1e4 to 1e6" and small[4] == "1.06 is for 1e5 to 1e7 |"  # no verdict off the targets' N
 

@@ -104,8 +104,9 @@ def summary(rows: list[dict], command: str) -> str:
         mean = statistics.fmean(e for e, _ in each)  # the exponent of the rounds' geometric mean ratio
         target = TARGETS[name]["exponent"]
         scaling = (mine[0]["short_n"], mine[0]["long_n"]) == SCALING  # the targets' N
-        verdict = (f"{target} ({'met' if mean <= target else 'over'})" if scaling
-                   else f"{target} is for {_label(SCALING[0])} to {_label(SCALING[1])}")
+        straddle = min(e for e, _ in each) <= target < max(e for e, _ in each)
+        verdict = (f"{target} ({'met' if mean <= target else 'over'}{', rounds on both sides' if straddle else ''})"
+                   if scaling else f"{target} is for {_label(SCALING[0])} to {_label(SCALING[1])}")
         lines.append(f"| {name} | {_label(mine[0]['short_n'])} to {_label(mine[0]['long_n'])} | "
                      + ", ".join(f"{e:.3f} ({s:.3f})" for e, s in each) + f" | {mean:.3f} | {verdict} |")
     return "\n".join(lines) + "\n"
