@@ -3,7 +3,6 @@
 import csv
 import importlib.util
 import math
-import os
 
 import pytest
 from conftest import ROOT
@@ -50,7 +49,7 @@ def test_summary_gives_each_round_their_mean_and_the_verdict_only_for_the_target
     assert small[1] == "1e4 to 1e6" and small[4] == "1.06 is for 1e5 to 1e7 |"  # no verdict off the targets' N
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="the two sides need two cores")
+@pytest.mark.skipif(len(expo.cores()) < 2, reason="the two sides need two cores")
 def test_a_small_round_writes_its_row_and_table(tmp_path):
     expo.main(["--models", "lattice-2d", "--n", "2000", "--short", "500", "--rounds", "1", "-o", str(tmp_path)])
     (row,) = csv.DictReader(open(tmp_path / "cost_exponent.csv"))

@@ -57,6 +57,11 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"cost_exponent.py: {message}\n")  # one line, naming what was wrong
 
 
+def cores() -> list[int]:
+    """The cores this process may run on (all of them where the OS does not say)."""
+    return sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else list(range(os.cpu_count() or 1))
+
+
 def _side(params: dict, n: int, seed: int, stop: str, core: int) -> subprocess.Popen:
     """Start one side pinned to ``core``: the long one (``stop`` "-") or the short loop."""
     preexec = (lambda: os.sched_setaffinity(0, {core})) if hasattr(os, "sched_setaffinity") else None
@@ -65,11 +70,11 @@ def _side(params: dict, n: int, seed: int, stop: str, core: int) -> subprocess.P
                             stdout=subprocess.PIPE, text=True, env=env, preexec_fn=preexec)
 
 
-def one_round(params: dict, long_n: int, short_n: int, seed: int, long_core: int) -> dict:
+def one_round(params: dict, long_n: int, short_n: int, seed: int, long_core: int, short_core: int) -> dict:
     """Grow the long cluster beside the short loop; the round's figures (``exponent`` computes the rest)."""
     with tempfile.TemporaryDirectory() as scratch:
         stop = str(Path(scratch) / "stop")
-        short = _side(params, short_n, SHORT_SEED, stop, 1 - long_core)
+        short = _side(params, short_n, SHORT_SEED, stop, short_core)
         long = _side(params, long_n, seed, "-", long_core)
         (big,) = json.loads(long.communicate()[0])
         Path(stop).touch()
@@ -127,12 +132,14 @@ def main(argv=None) -> None:
         parser.error(f"--rounds: {args.rounds} is not a positive count")
     if not 1 <= args.short < args.n or args.n != int(args.n) or args.short != int(args.short):
         parser.error(f"--short {args.short:g} and --n {args.n:g}: whole counts with 1 <= short < n")
-    if (os.cpu_count() or 1) < 2:
+    pair = cores()[:2]
+    if len(pair) < 2:
         parser.error("needs two cores: one for each side")
     rows = []
     for name in args.models:
         for k in range(args.rounds):
-            row = {"model": name, **one_round(MODELS[name], int(args.n), int(args.short), k + 1, k % 2)}
+            long_core, short_core = pair[k % 2], pair[1 - k % 2]
+            row = {"model": name, **one_round(MODELS[name], int(args.n), int(args.short), k + 1, long_core, short_core)}
             rows.append(row)
             e, s = exponent(row)
             print(f"{name} round {k + 1}: long {row['long_ns']:.0f} ns a particle, short {row['short_ns']:.0f} "
