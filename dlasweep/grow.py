@@ -16,7 +16,17 @@ KERNELS = {"lattice": lattice.grow_lattice, "offlattice": offlattice.grow_offlat
 WATCH_MARKS = 200
 """Counts at which a watched growth reports progress: every n / WATCH_MARKS particles."""
 WATCH_SECONDS = 0.2
-"""How often a watched growth calls its ``progress``."""
+"""How often a watched growth calls its ``progress`` and looks at ``STOP``."""
+STOP = threading.Event()
+"""Set while an interrupted sweep closes its embedded cluster: a growth waiting in a worker's thread
+then raises ``Interrupted`` within ``WATCH_SECONDS``, so that closing, which joins those threads,
+does not wait for the kernels (a sweep of 3e6-particle clusters took 30 s to end after Ctrl-C)."""
+
+
+class Interrupted(Exception):
+    """A growth given up because ``STOP`` was set; its kernel runs on until the process ends."""
+
+
 INLINE_INCHES, INLINE_DPI = 4.5, 100
 """A cluster's inline picture in a notebook (``Cluster._repr_png_``): 450 pixels square, tens of KB."""
 
@@ -144,7 +154,8 @@ def grow_many(n: int, seeds, *, checkpoints=None, **params) -> list:
     list of Cluster
     """
     p, marks = _checked(n, checkpoints, params)
-    results = KERNELS[p["model"]](int(n), p, marks, [rng_for(seed) for seed in seeds])
+    rngs = [rng_for(seed) for seed in seeds]
+    results = _waited(lambda: KERNELS[p["model"]](int(n), p, marks, rngs))
     return [_cluster(result, p, marks) for result in results]
 
 
@@ -164,6 +175,33 @@ def _cluster(result, p, marks):
     return Cluster(points, steps, _params.Status(code).name, dict(p), marks, times, seconds, parents)
 
 
+def _waited(call, between=None):
+    """``call()`` run in a thread while this one waits, and its result; ``between()`` after each wait.
+
+    Python runs a signal's handler here, between joins, never inside a compiled kernel, so that
+    Ctrl-C reaches the caller at once; ``STOP`` reaches a caller that is not the main thread.
+    """
+    result = []
+
+    def run():
+        try:
+            result.append(call())
+        except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
+            result.append(err)
+
+    worker = threading.Thread(target=run, name="dlasweep-grow", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(WATCH_SECONDS)
+        if STOP.is_set():
+            raise Interrupted("growth given up: the sweep was interrupted")
+        if between is not None:
+            between()
+    if isinstance(result[0], BaseException):
+        raise result[0]
+    return result[0]
+
+
 def _watched(kernel, n, p, marks, rng, progress=None):
     """``kernel(n, p, marks, [rng])`` run in a thread while this one waits, interruptible; the counts it
     passes reported to ``progress`` (when given).
@@ -175,26 +213,14 @@ def _watched(kernel, n, p, marks, rng, progress=None):
     """
     watch = np.union1d(marks, np.linspace(0, n, WATCH_MARKS + 1)[1:].astype(np.int64)).astype(np.int64)
     times = np.full((1, len(watch)), np.nan)
-    result = []
-
-    def run():
-        try:
-            result.extend(kernel(n, p, watch, [rng], times))
-        except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
-            result.append(err)
-
     start = time.perf_counter()
-    worker = threading.Thread(target=run, name="dlasweep-grow", daemon=True)
-    worker.start()
-    # Python runs a signal's handler here, between joins, never inside the compiled kernel.
-    while worker.is_alive():
-        worker.join(WATCH_SECONDS)
-        if progress is not None:
-            passed = np.flatnonzero(~np.isnan(times[0]))
-            progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
-    if isinstance(result[0], BaseException):
-        raise result[0]
-    points, steps, parents, code, _, seconds = result[0]
+
+    def report():
+        passed = np.flatnonzero(~np.isnan(times[0]))
+        progress(int(watch[passed[-1]]) if len(passed) else 0, time.perf_counter() - start)
+
+    (result,) = _waited(lambda: kernel(n, p, watch, [rng], times), report if progress is not None else None)
+    points, steps, parents, code, _, seconds = result
     if progress is not None:
         progress(len(points), time.perf_counter() - start)
     return points, steps, parents, code, times[0, np.isin(watch, marks)], seconds

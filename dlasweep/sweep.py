@@ -53,7 +53,7 @@ from tqdm import tqdm
 from . import schema, store
 from .analysis import headline
 from .fit import growth_counts
-from .grow import compiled
+from .grow import STOP, compiled
 from .parts import PARTICLES, Parts, parts_folder
 from .progress import Lines
 from .spec import Spec, load_spec
@@ -330,8 +330,13 @@ def _connected(client, scheduler_file, workers, n_tasks, load):
                            dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster,
               Client(cluster) as embedded):
             loading.join()
-            yield embedded
+            try:
+                yield embedded
+            except BaseException:
+                STOP.set()  # closing joins the worker's threads: their growths give up first
+                raise
     finally:
+        STOP.clear()
         sys.setswitchinterval(interval)
 
 

@@ -143,6 +143,15 @@ def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
     assert seconds < INTERRUPTED_WITHIN and not (tmp_path / "long.nc").exists()
 
 
+def test_ctrl_c_ends_a_sweep_of_large_clusters_without_waiting_for_its_kernels(tmp_path):
+    """Closing the embedded cluster joins its threads, which waited for their kernels (30 s for these
+    clusters of 3e6 before ``grow.STOP``); now their growths give up and the command ends at once."""
+    (tmp_path / "big.toml").write_text("[grid]\nn_particles = [3000000]\nseeds = 2\n")
+    status, err, seconds = interrupt(["sweep", "big.toml", "-o", "big.nc"], tmp_path)
+    assert status == 130 and err.splitlines()[-1].startswith("dlasweep sweep: interrupted"), err
+    assert seconds < INTERRUPTED_WITHIN and not (tmp_path / "big.nc").exists()
+
+
 @pytest.mark.parametrize("options, named", [
     (["--model", "offlattice", "--step", "1e9"], "--step: 1000000000.0 is above 100 diameters"),
     (["--model", "offlattice", "--stickiness", "1e-300"], "--stickiness: 1e-300 is not in [0.0001, 1]"),

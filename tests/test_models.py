@@ -4,6 +4,7 @@ import importlib
 import os
 import subprocess
 import sys
+import threading
 import time
 
 import naive
@@ -197,6 +198,31 @@ def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
     monkeypatch.setitem(growing.KERNELS, "lattice", broken)
     with pytest.raises(MemoryError, match="simulated"):
         dla.grow(100, 0, progress=lambda k, s: None)
+
+
+@pytest.mark.parametrize("many", [False, True])
+def test_a_waiting_growth_gives_up_within_a_watch_once_stop_is_set(monkeypatch, many):
+    """What an interrupted sweep's closing relies on (``grow.STOP``): ``grow`` and ``grow_many``
+    raise ``Interrupted`` within ``WATCH_SECONDS`` of it, while their kernel still runs."""
+    growing = importlib.import_module("dlasweep.grow")
+    release = threading.Event()
+
+    def slow(n, p, marks, rngs, times=None):
+        release.wait(30)  # a kernel that runs on until the test ends
+        raise AssertionError("given up before this")
+
+    monkeypatch.setitem(growing.KERNELS, "lattice", slow)
+    threading.Timer(0.3, growing.STOP.set).start()
+    start = time.monotonic()
+    try:
+        with pytest.raises(growing.Interrupted):
+            growing.grow_many(100, [1, 2]) if many else dla.grow(100, 0)
+        assert 0.3 <= time.monotonic() - start < 0.3 + 3 * growing.WATCH_SECONDS
+    finally:
+        growing.STOP.clear()
+        release.set()
+    monkeypatch.undo()
+    assert dla.grow(100, 0).n == 100  # STOP cleared: growth as before
 
 
 @pytest.mark.parametrize("kw", [{"model": "lattice"}, {"model": "offlattice"}, {"model": "lattice", "dim": 3},
