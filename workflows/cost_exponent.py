@@ -42,9 +42,7 @@ runs = []
 while True:
     t = time.process_time(); c = dla.grow(n, seed=seed, **params); dt = time.process_time() - t
     runs.append(dict(seconds=dt, steps=float(c.steps.astype(float).mean()), seed=seed))
-    if stop == "-":  # the long side: one cluster, then tell the short side
-        break
-    if os.path.exists(stop):
+    if stop == "-" or os.path.exists(stop):  # the long side grows one; the short one until told
         break
     seed += 1
 print(json.dumps(runs))
