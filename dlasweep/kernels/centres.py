@@ -40,7 +40,19 @@ in from the launch circle takes fewer jumps, a difference that grows with the
 cluster. Side by side (seed 1; 3D 1e5 seeds 1 and 2): 2D 1e6 4.94 s against 5.32
 (54.9 steps a particle against 61.4), 2D 1e7 64.37 against 74.80 (58.5 against
 72.3), 3D 1e5 2.30 against 2.34 (112.2 against 124.0), 3D 1e6 15.31 against 18.19
-(125.7 against 143.8)."""
+(125.7 against 143.8).
+
+A yet tighter bound saves few steps, and in 2D none of their growth with N
+(the far jumps, 3.7 a particle at 2D 1e5 and 13.7 at 1e7, cross gaps that widen
+with the cluster). Caps of (64, 16), the bound within a few percent of the
+distance (lattice, seed 1): 2D 1e6 38.9 steps a particle against 40.1, 2D 1e7
+43.8 against 45.2 (12.6% more than at 1e6 with either); 3D 1e6 98.1 against
+99.8, 3D 1e7 107.9 against 116.1, but in 280 s, not side by side, where the
+present caps took 197 to 232 beside other runs (a newly held cell rewrites
+31**3 cells of a level, against 11**3). The exact distance to the nearest held
+coarse cell in the pyramid's place (a brute-force measurement, not a kernel)
+at 1e5: 2D 33.5 against 34.6 (the pyramid's bound 0.93 of it on average), 3D
+84.6 against 86.3 (0.84)."""
 CCAP = (8, 4)
 """Cap of the centre field (coarse cells), 2D and 3D: each particle lowers the
 (2 cap - 1)**dim cells about its own, 30 sites (3D 14) from their centres.
@@ -217,7 +229,8 @@ def centre_bound(field, dim, fw, X0, X1, X2):
     against 48.5 with the surrounding centres, 1e7 60.6 against 54.6; 3D 1e7 137.3
     against 119.4. The same above the field (``pyramid_dist``) took fewer steps
     (2D 1e6: 46.3; 3D lattice 1e6: 98.1 against 100.0) but no less time (2D 1.05
-    to 1.15 times; 3D 0.96 to 1.11), and is not done. The cells
+    to 1.15 times; 3D 0.96 to 1.11; 3D 1e7, seeds 1 and 2: 112.2 and 109.4
+    against 116.1 and 112.3 steps, 1.018 and 1.095 times), and is not done. The cells
     are spelled out, with fixed strides within a tile: as a loop over them with
     ``field_cell`` (the same walks) 2D 1e6 took 1.02 and 1.04 times the time.
     """
@@ -283,7 +296,11 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     mean of 16 seeds), 1.10 at 1e7 (2 seeds); the disk of the cell three cells
     out along the walker's radius, read in the same pass as this bound, 31.9
     and 36.6 steps at 1e5 and 1e6 against 34.6 and 39.9, and 1.05 times the
-    time at 1e6 (16 seeds). The cells read cost more than the jumps saved."""
+    time at 1e6 (16 seeds). The cells read cost more than the jumps saved.
+    Nor do the levels below the answer cost: the search started at the level
+    the walker's previous far jump used (the same clusters) took 0.82 to 1.27
+    times the time at 3D lattice 1e6 (10 seeds, median 1.02), 1.002 and 0.952
+    at 1e7 (2 seeds)."""
     step = _STEP[dim]
     for level in range(1, len(pstart) - 1):
         shift = FS + step * level
