@@ -19,10 +19,10 @@ sweep: $(STAMP)
 example: sweep
 	.venv/bin/dlasweep report results/quick.nc -o results/examples/quick
 
-# On every core, a test file to a worker (the files' module fixtures are shared by their tests): 9 to 11
-# minutes on 2 cores with an empty numba cache, against 17 one file after another.
+# On every core, a test file to a worker (the files' module fixtures are shared by their tests), in the
+# order tests/conftest.py gives them (the longest first).
 test: $(STAMP)
-	$(PY) -m pytest -n auto --dist loadfile
+	$(PY) -m pytest -n auto --dist loadfile --no-loadscope-reorder
 
 # The launcher on a one-node SLURM started for the test (as root; apt installs slurm-wlm and munge if missing).
 test-slurm: $(STAMP)
