@@ -32,7 +32,7 @@ root_seed = 12345
 
 FIRST_FILES = ("test_wheel.py", "test_measure.py", "test_slurm.py")
 """Run first, longest first: the longest files (a fresh venv that compiles every kernel again, about
-4 minutes; the box counts against their references, 4; the SLURM cluster, 2), which ``make test``
+5 minutes; the box counts against their references, 3; the SLURM cluster, 2), which ``make test``
 gives one worker each while the other takes the rest; last, one ran on while the other idled. The
 order holds because ``make test`` keeps it (``--no-loadscope-reorder``): by default xdist sends the
 files with the most tests first, and the wheel's four went last."""

@@ -350,7 +350,10 @@ def field_fill(field, dim, fw, cap, held):
 PYRAMID_STEP = (0, 0, 2, 1)
 """By dimension: each level of the pyramid above a field has cells ``2**PYRAMID_STEP``
 times wider than the level below; level 0 is the field (cells of
-``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps."""
+``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps. 2D's of 1
+(the bound read where the distance is 8 to 16 cells, not 4 to 16): 2D lattice
+1e6 (seeds 1 to 4) 39.1, 40.9, 41.4 and 40.0 steps a particle against 40.1,
+39.9, 40.3 and 40.1, in 1.01 to 1.12 times the time side by side."""
 
 
 @jit
