@@ -229,7 +229,7 @@ def centre_bound(field, dim, fw, X0, X1, X2):
     against 48.5 with the surrounding centres, 1e7 60.6 against 54.6; 3D 1e7 137.3
     against 119.4. The same above the field (``pyramid_dist``) took fewer steps
     (2D 1e6: 46.3; 3D lattice 1e6: 98.1 against 100.0) but no less time (2D 1.05
-    to 1.15 times; 3D 0.96 to 1.11; 3D 1e7, seeds 1 and 2: 112.2 and 109.4
+    to 1.15 times; 3D 0.96 to 1.11; 3D lattice 1e7, seeds 1 and 2: 112.2 and 109.4
     against 116.1 and 112.3 steps, 1.018 and 1.095 times), and is not done. The cells
     are spelled out, with fixed strides within a tile: as a loop over them with
     ``field_cell`` (the same walks) 2D 1e6 took 1.02 and 1.04 times the time.
