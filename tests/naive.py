@@ -129,6 +129,21 @@ def walk_on_spheres_exterior(dim, r0, far, n, rng, eps=1e-7):
     return x / np.linalg.norm(x, axis=1)[:, None], hit
 
 
+def walk_on_spheres_interior(dim, start, n, rng, eps=1e-7):
+    """Where Brownian paths from ``start`` (inside the unit ball about 0) leave the ball, by
+    walk-on-spheres until within ``eps`` of its sphere, projected on it."""
+    x = np.tile(np.asarray(start, float), (n, 1))
+    alive = np.ones(n, bool)
+    while alive.any():
+        idx = np.flatnonzero(alive)
+        gap = 1.0 - np.linalg.norm(x[idx], axis=1)
+        alive[idx[gap < eps]] = False
+        idx, gap = idx[gap >= eps], gap[gap >= eps]
+        u = rng.normal(size=(len(idx), dim))
+        x[idx] += gap[:, None] * u / np.linalg.norm(u, axis=1)[:, None]
+    return x / np.linalg.norm(x, axis=1)[:, None]
+
+
 def _lattice_contacts(dim, moore):
     for d in itertools.product((-1, 0, 1), repeat=dim):
         a = np.abs(d)

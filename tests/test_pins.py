@@ -79,7 +79,9 @@ def _clustered(rng, dim, line, size, n):
 @pytest.mark.parametrize("dim, line", [(2, False), (3, False), (2, True), (3, True)])
 def test_walk_bound_is_map_dist(dim, line):
     """The walk's bound (levels searched only where the field leaves them
-    open) equals ``map_dist``'s full search, and wraps periodic coordinates."""
+    open) equals ``map_dist``'s full search, and wraps periodic coordinates;
+    where the centre pyramid gives it, the ball it returns holds no particle
+    centre, holds w, and the bound is w's way to its sphere."""
     rng = np.random.default_rng(3 + dim + 10 * line)
     size = 48 if line else 0
     n = 600 if dim == 2 else 1500
@@ -95,13 +97,21 @@ def test_walk_bound_is_map_dist(dim, line):
     if line:
         q[:, -1] = np.abs(q[:, -1])
     seen = set()
+    balls = 0
     for x in q:
         w = np.r_[x, np.zeros(3 - dim)]
         want = cells.map_dist(w, dim, size, gi, words, start, blocks, cellz, field)
         moved = w.copy()
-        got = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw,
-                               flo, ftop, pstart)
+        got, ball, gap, shift = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field,
+                                                 fw, flo, ftop, pstart)
         assert got == want, (x, got, want)
+        if ball > 0.0:
+            grid = moved[:dim] + np.array([m0, m1, m2][:dim])
+            centre = ((grid.astype(np.int64) >> shift) << shift) + (1 << (shift - 1)) - np.array([m0, m1, m2][:dim])
+            assert np.sqrt(((pts - centre) ** 2).sum(1)).min() >= ball - 1e-9
+            assert abs(np.sqrt(((moved[:dim] - centre) ** 2).sum()) - gap) < 1e-9
+            assert got == ball - gap
+            balls += 1
         if line:
             wrapped = w[: dim - 1] - size * np.floor(w[: dim - 1] / size)
             np.testing.assert_array_equal(moved[: dim - 1], wrapped)
@@ -109,6 +119,7 @@ def test_walk_bound_is_map_dist(dim, line):
             np.testing.assert_array_equal(moved, w)
         seen.add(np.sign(want))
     assert seen == {-1.0, 0.0, 1.0} if not line else seen >= {0.0, 1.0}
+    assert balls > 500 if not line else balls == 0  # substrates have no pyramid above the field
 
 
 def test_the_lattice_walks_single_step_is_touches_and_step_to_spelled_out():

@@ -102,6 +102,46 @@ def direction(rng, dim, out):
     out[2] = 1.0 - 2.0 * s
 
 
+@inline
+def _moebius(u0, u1, rho):
+    """The point of the unit circle where Brownian motion from ``rho`` (on the real axis,
+    ``|rho| < 1``) leaves the unit disk, from the uniform point ``u``: the Moebius map
+    z -> (z + rho) / (1 + rho z) takes the uniform law on the circle to the Poisson kernel
+    seen from rho; no trigonometry."""
+    zr, zi = u0 + rho, u1
+    dr, di = 1.0 + rho * u0, rho * u1
+    den = dr * dr + di * di
+    return (zr * dr + zi * di) / den, (zi * dr - zr * di) / den
+
+
+@inline
+def _poisson_cos(radius, inner, x):
+    """The cosine of the angle, seen from the centre and measured from the point's own
+    direction, at which Brownian motion from a point ``inner`` from the centre of a sphere of
+    ``radius`` leaves the ball (3D, ``inner < radius``): its inverse distance to the exit point
+    is uniform (``x`` a uniform draw)."""
+    lo, hi = 1.0 / (radius + inner), 1.0 / (radius - inner)
+    inv = hi - x * (hi - lo)
+    cos_t = (radius * radius + inner * inner - 1.0 / (inv * inv)) / (2.0 * inner * radius)
+    return min(1.0, max(-1.0, cos_t))
+
+
+@inline
+def _about_axis(a0, a1, a2, cos_t, c, s):
+    """The unit vector at angle acos(cos_t) from the unit axis a, turned about it by the
+    angle whose cosine and sine are ``c`` and ``s``."""
+    if abs(a0) < 0.9:
+        e0, e1, e2 = 0.0, a2, -a1
+    else:
+        e0, e1, e2 = -a2, 0.0, a0
+    n1 = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    e0, e1, e2 = e0 / n1, e1 / n1, e2 / n1
+    f0, f1, f2 = a1 * e2 - a2 * e1, a2 * e0 - a0 * e2, a0 * e1 - a1 * e0
+    sin_t = np.sqrt(1.0 - cos_t * cos_t)
+    c, s = sin_t * c, sin_t * s
+    return cos_t * a0 + c * e0 + s * f0, cos_t * a1 + c * e1 + s * f1, cos_t * a2 + c * e2 + s * f2
+
+
 @borrow
 def return_to_sphere(rng, dim, pos, radius, scratch):
     """Move a walker at ``|pos| > radius`` to where it first hits the sphere.
@@ -115,41 +155,52 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
     """
     r = np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
     if dim == 2:
-        # the Moebius map z -> (z + rho) / (1 + rho z) takes the uniform law on
-        # the unit circle to the Poisson kernel seen from rho; no trigonometry
-        rho = radius / r
         direction(rng, 2, scratch)
-        zr, zi = scratch[0] + rho, scratch[1]
-        dr, di = 1.0 + rho * scratch[0], rho * scratch[1]
-        den = dr * dr + di * di
-        wr, wi = (zr * dr + zi * di) / den, (zi * dr - zr * di) / den
+        wr, wi = _moebius(scratch[0], scratch[1], radius / r)
         er, ei = pos[0] / r, pos[1] / r
         pos[0] = radius * (wr * er - wi * ei)
         pos[1] = radius * (wr * ei + wi * er)
         return True
     if rng.random() >= radius / r:
         return False
-    inner = radius * radius / r  # distance of the Kelvin image from the centre
-    lo, hi = 1.0 / (radius + inner), 1.0 / (radius - inner)
-    inv = hi - rng.random() * (hi - lo)
-    cos_t = (radius * radius + inner * inner - 1.0 / (inv * inv)) / (2.0 * inner * radius)
-    cos_t = min(1.0, max(-1.0, cos_t))
-    sin_t = np.sqrt(1.0 - cos_t * cos_t)
-    # orthonormal frame (axis, e1, e2) around the walker's direction
-    ax, ay, az = pos[0] / r, pos[1] / r, pos[2] / r
-    if abs(ax) < 0.9:
-        e1x, e1y, e1z = 0.0, az, -ay
-    else:
-        e1x, e1y, e1z = -az, 0.0, ax
-    n1 = np.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
-    e1x, e1y, e1z = e1x / n1, e1y / n1, e1z / n1
-    e2x, e2y, e2z = ay * e1z - az * e1y, az * e1x - ax * e1z, ax * e1y - ay * e1x
+    cos_t = _poisson_cos(radius, radius * radius / r, rng.random())  # the Kelvin image's distance from the centre
     phi = 2.0 * np.pi * rng.random()
-    c, s = sin_t * np.cos(phi), sin_t * np.sin(phi)
-    pos[0] = radius * (cos_t * ax + c * e1x + s * e2x)
-    pos[1] = radius * (cos_t * ay + c * e1y + s * e2y)
-    pos[2] = radius * (cos_t * az + c * e1z + s * e2z)
+    v0, v1, v2 = _about_axis(pos[0] / r, pos[1] / r, pos[2] / r, cos_t, np.cos(phi), np.sin(phi))
+    pos[0] = radius * v0
+    pos[1] = radius * v1
+    pos[2] = radius * v2
     return True
+
+
+@borrow
+def ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, radius):
+    """Move the walker at w, inside the ball of ``radius`` about c, to where Brownian motion
+    from it first leaves the ball (the interior Poisson kernel, as ``return_to_sphere`` draws
+    it), from the stream state in registers (see ``xdir``), which it returns.
+
+    An exact jump where the ball about w that walk-on-spheres would take is smaller: the
+    same law as walk-on-spheres inside the larger ball, in one draw.
+    """
+    d0, d1, d2 = w[0] - c0, w[1] - c1, w[2] - c2
+    inner = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if inner <= 1e-9 * radius:  # at the centre: a uniform point
+        s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+        w[0], w[1], w[2] = c0 + radius * u0, c1 + radius * u1, c2 + radius * u2
+        return s0, s1, s2, s3
+    a0, a1, a2 = d0 / inner, d1 / inner, d2 / inner
+    if dim == 2:
+        s0, s1, s2, s3, u0, u1, _ = xdir(s0, s1, s2, s3, 2)
+        wr, wi = _moebius(u0, u1, inner / radius)
+        w[0] = c0 + radius * (wr * a0 - wi * a1)
+        w[1] = c1 + radius * (wr * a1 + wi * a0)
+        return s0, s1, s2, s3
+    s0, s1, s2, s3, x = xo(s0, s1, s2, s3)
+    s0, s1, s2, s3, c, s, _ = xdir(s0, s1, s2, s3, 2)  # a uniform angle about the axis
+    v0, v1, v2 = _about_axis(a0, a1, a2, _poisson_cos(radius, inner, x), c, s)
+    w[0] = c0 + radius * v0
+    w[1] = c1 + radius * v1
+    w[2] = c2 + radius * v2
+    return s0, s1, s2, s3
 
 
 @borrow

@@ -34,6 +34,8 @@ from ..centres import (
     FS,
     _centre_lower,
     centre_bound,
+    centre_gap,
+    pyramid_ball,
     pyramid_dist,
     pyramid_lower,
 )
@@ -521,6 +523,10 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     w's and level FS is set; at the field's cap the pyramid bounds, or where
     the grid is periodic the map levels above ``flo`` (those up to it are
     clear). A test holds it to ``map_dist`` on random grids.
+
+    Returns the bound, and where the pyramid gives it, the radius of the ball about the centre
+    of w's cell of the pyramid level that holds no particle centre, w's distance to that centre
+    and the level's shift (else 0.0, 0.0, 0), from which the walk jumps out of that ball.
     """
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
@@ -536,6 +542,9 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     X1 = x1 + m1
     X2 = w[2] + m2 if dim == 3 else 0.0
     dm = -1.0
+    ball = 0.0  # the centre pyramid's particle-free ball about the centre of w's cell, where it bounds
+    gap = 0.0
+    shift = 0
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
         e, dm = centre_bound(field, dim, fw, X0, X1, X2)
@@ -545,7 +554,12 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             hi = min(ftop, FS)
         elif e == 0:
             if len(pstart) > 2:
-                dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2))
+                centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+                if shift > 0:
+                    gap = centre_gap(X0, X1, X2, dim, shift)
+                    if centre - gap > dm:
+                        dm = centre - gap
+                        ball = centre
             else:
                 lo, hi = flo, ftop
         while hi - lo > 1:
@@ -562,7 +576,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             side = float(1 << lo)
             f = face_gap(X0, X1, X2, dim, lo)
             dm = max(dm, side + f)
-    return dm
+    return dm, ball, gap, shift
 
 
 @inline

@@ -3,7 +3,9 @@ attachment of particles, and the lockstep walkers.
 
 Far from the cluster a walker moves by walk-on-spheres jumps onto the
 sphere whose radius is a lower bound on its free distance (``cells``:
-field, maps, and the cluster's bounding circle). Near it, exact nearest
+field, maps, and the cluster's bounding circle); where the centre pyramid
+gives that bound, out of the larger ball about the centre of its cell that
+holds no particle, by the exact exit law (``walk.ball_exit``). Near it, exact nearest
 distances come from a neighbour list of radius ``LIST_RADIUS`` gathered
 around an anchor point: while the walker stays near the anchor its free
 distance is a minimum over a handful of centres. Inside the ``EPS`` shell
@@ -17,7 +19,7 @@ from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
-from ..walk import return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
+from ..walk import ball_exit, return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     COVERED,
     INF,
@@ -37,7 +39,7 @@ from .cells import (
     sort_cells,
     walk_geometry,
 )
-from ..centres import FS, centre_bound, pyramid_dist
+from ..centres import FS, centre_bound, centre_gap, pyramid_ball
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -230,6 +232,9 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                 X1 = x1 + m1
                 X2 = w[2] + m2 if dim == 3 else 0.0
                 dm = -1.0
+                ball = 0.0  # the centre pyramid's particle-free ball about the centre of w's cell, where it bounds
+                gap = 0.0
+                shift = 0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
                     e, dm = centre_bound(field, dim, fw, X0, X1, X2)
@@ -239,7 +244,12 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                         hi = min(ftop, FS)
                     elif e == 0:
                         if len(pstart) > 2:
-                            dm = max(dm, pyramid_dist(field, pstart, dim, int(W), X0, X1, X2))
+                            centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+                            if shift > 0:
+                                gap = centre_gap(X0, X1, X2, dim, shift)
+                                if centre - gap > dm:
+                                    dm = centre - gap
+                                    ball = centre
                         else:
                             lo, hi = flo, ftop
                     while hi - lo > 1:
@@ -273,6 +283,16 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                 g = min(g, w[up])
             g = min(g, gb)
             # ---- move
+            if not exact and ball > 0.0 and g == ball - gap - 1.0 and gb >= ball + gap and step == 0.0 and jumps:
+                # out of the ball about the pyramid cell's centre, which holds the one about w
+                h = float(1 << (shift - 1))
+                c0 = float((int(X0) >> shift) << shift) + h - m0
+                c1 = float((int(X1) >> shift) << shift) + h - m1
+                c2 = float((int(X2) >> shift) << shift) + h - m2 if dim == 3 else 0.0
+                s0, s1, s2, s3 = ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, ball - 1.0)
+                total += 1
+                pending += 1
+                continue
             if step == 0.0 and jumps and g >= EPS:
                 # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
                 # holds the copies together): one condition for both timed 25% slower at
