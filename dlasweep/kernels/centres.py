@@ -288,11 +288,14 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     That cell's disk, or a neighbour's, holds X off its centre and may be
     larger than the one about X; the walker's exit from it has a closed form
     (``walk.ball_exit``). The off-lattice walk jumps out of X's own cell's
-    ball (``pyramid_ball``; the lattice walk does not yet): 2D 1e6, seeds 1
-    and 2, 45.6 and 45.7 steps a particle against 47.8 and 48.6, in 0.85 and
-    0.84 times the time; 3D 1e6, seeds 1 to 4, 6% fewer steps in about the
-    same time; 3D 1e7, 108.2 steps against 120.6 in 0.906 times the time
-    (side by side, one core each). Measured and not done (2D
+    ball (``pyramid_ball``): 2D 1e6, seeds 1 and 2, 45.6 and 45.7 steps a
+    particle against 47.8 and 48.6, in 0.85 and 0.84 times the time; 3D 1e6,
+    seeds 1 to 4, 6% fewer steps in about the same time; 3D 1e7, 108.2 steps
+    against 120.6 in 0.906 times the time (side by side, one core each). The
+    lattice walk does not: its circle jumps where the pyramid's bound reached
+    farthest, made such exits (seed 1, side by side), took 43.2 steps a
+    particle against 45.2 at 2D 1e7 in 1.072 times the time, 107.2 against
+    116.1 at 3D 1e7 in 1.108 times. Measured and not done (2D
     lattice, side by side): the largest such disk of the 5x5 cells about X's
     took 31.7 steps a particle at 1e5 against 34.6, and 1.05 to 1.28 times the
     time at 1e6 (6 seeds); the disk of the cell two cells up the pyramid's
