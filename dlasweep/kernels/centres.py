@@ -52,7 +52,10 @@ present caps took 197 to 232 beside other runs (a newly held cell rewrites
 31**3 cells of a level, against 11**3). The exact distance to the nearest held
 coarse cell in the pyramid's place (a brute-force measurement, not a kernel)
 at 1e5: 2D 33.5 against 34.6 (the pyramid's bound 0.93 of it on average), 3D
-84.6 against 86.3 (0.84)."""
+84.6 against 86.3 (0.84). A larger cap on levels 2 and up alone (12 in 3D, where a
+newly held cell is rare): 3D lattice 1e7, seeds 1 and 2, 109.4 and 110.1 steps against 116.1
+and 112.3 in 0.914 and 1.035 times the time; 3D off-lattice 1e5, seeds 1 to 6, 98.1 steps
+against 96.3 (coarser units a level cell). Not kept."""
 CCAP = (8, 4)
 """Cap of the centre field (coarse cells), 2D and 3D: each particle lowers the
 (2 cap - 1)**dim cells about its own, 30 sites (3D 14) from their centres.
@@ -289,13 +292,17 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     larger than the one about X; the walker's exit from it has a closed form
     (``walk.ball_exit``). The off-lattice walk jumps out of X's own cell's
     ball (``pyramid_ball``): 2D 1e6, seeds 1 and 2, 45.6 and 45.7 steps a
-    particle against 47.8 and 48.6, in 0.85 and 0.84 times the time; 3D 1e6,
-    seeds 1 to 4, 6% fewer steps in about the same time; 3D 1e7, 108.2 steps
-    against 120.6 in 0.906 times the time (side by side, one core each). The
-    lattice walk does not: its circle jumps where the pyramid's bound reached
-    farthest, made such exits (seed 1, side by side), took 43.2 steps a
-    particle against 45.2 at 2D 1e7 in 1.072 times the time, 107.2 against
-    116.1 at 3D 1e7 in 1.108 times. Measured and not done (2D
+    particle against 47.8 and 48.6, in 0.85 and 0.84 times the time (side by
+    side, one core each); in ``workflows/cost_exponent.py`` (its rounds against
+    the rows they replaced, run on an earlier day), 2D 1e7 7495 and
+    8257 ns a particle against 9043 and 9466 (50.4 and 50.9 steps against
+    54.6 and 53.1), 1e5 5414 and 5814 against 6276 and 6340; 3D 1e7 28863 and
+    29352 against 33407 and 34867 (109.7 and 111.9 steps against 120.6 and
+    119.7), 1e5 15640 and 15868 against 17856 and 19234. The lattice walk
+    does not: its circle jumps where the pyramid's bound reached farthest,
+    made such exits (seed 1, side by side), took 43.2 steps a particle against
+    45.2 at 2D 1e7 in 1.072 times the time, 107.2 against 116.1 at 3D 1e7 in
+    1.108 times. Measured and not done (2D
     lattice, side by side): the largest such disk of the 5x5 cells about X's
     took 31.7 steps a particle at 1e5 against 34.6, and 1.05 to 1.28 times the
     time at 1e6 (6 seeds); the disk of the cell two cells up the pyramid's

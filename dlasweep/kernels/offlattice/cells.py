@@ -597,6 +597,11 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     the smallest squared centre distance among them (inf when none). Inlined
     into the walk, which borrows (``_jit.borrow``): inlined into a function
     that counts references, it counted those of its 11 arrays at every call.
+
+    A gather of the walk reads 27 particles in 5 of 16 cells to keep 2 (3D 1e5
+    to 1e6, 10 to 14 of them stored since the last ``sort_cells``); the lists
+    walked in turn, a particle of each at a time so that their reads overlap,
+    took 0.97 to 1.18 times the time at 3D 1e6 (4 seeds, the same clusters).
     """
     r2 = r * r
     nl = 0
