@@ -474,6 +474,73 @@ def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
     np.testing.assert_array_equal(order, np.arange(n))
 
 
+@pytest.mark.parametrize("case", ["3d", "plane", "2d"])
+def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
+    """``cells.sort_tail`` stores the rows attached since ``sort_cells`` cell after cell,
+    whether they were pushed on the lists one by one or the grid was built anew over
+    every row: a gather at any point finds the particles a grid of the same particles in
+    attachment order finds (by attachment number) at the same distances; each of those
+    rows' runs ascends within one cell and goes on to that cell's sorted rows; and the
+    rows below the tail do not move."""
+    from dlasweep.kernels.offlattice import cells
+
+    params = VARIANTS[case]
+    dim, size = params.get("dim", 2), params.get("size", 0)
+    line = params.get("seed_shape") == "line"
+    grown = dla.grow(3000, seed=5, **OFF, **params).points
+    n = len(grown)
+    first, middle = 1000, 2000
+    need = grown[:, -1].max() if line else np.abs(grown).max()
+    rng = np.random.default_rng(2)
+    probes = grown[rng.integers(0, n, 300)] + rng.uniform(-2.5, 2.5, (300, dim))
+    lists = np.empty(1024), np.empty(1024), np.zeros(1024), np.empty(1024, np.int64)
+
+    def gathered(rows, count, order, nxt, grid):
+        gi, gf, _, _, _, _, dirr, heads, _ = grid
+        found = []
+        for c in probes:
+            nl, near2 = cells.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
+            found.append((sorted(order[lists[3][:nl]]), near2))
+        return found
+
+    def expected(count):
+        pts = grown[:count].copy()
+        nxt = np.full(count, -1, np.int32)
+        grid = cells.build_grid(dim, line, size, need, pts, count, nxt, 0)
+        return gathered(pts, count, np.arange(count), nxt, grid)
+
+    def check_runs(pts, count, nxt, grid):
+        gi, gf = grid[0], grid[1]
+        place = [cells._cell_of(i, pts, dim, gi, gf) for i in range(count)]
+        for i in range(first, count):
+            j = nxt[i]
+            assert j == i + 1 or j < first, i
+            assert j < 0 or place[j] == place[i], i
+            assert j >= first or i + 1 == count or place[i + 1] != place[i], i  # one run a cell
+
+    pts = grown.copy()
+    nxt = np.full(n, -1, np.int32)
+    order = np.arange(n, dtype=np.int32)
+    grid = cells.build_grid(dim, line, size, need, pts, first, nxt, n)
+    gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
+    cells.sort_cells(pts, order, nxt, first, dim, gi, gf, dirr, heads)
+    sorted_rows = pts[:first].copy()
+    for i in range(first, middle):  # pushed one by one, as they attach
+        assert cells.insert(i, pts, nxt, dim, gi, gf, dirr, heads)
+    cells.sort_tail(pts, order, nxt, first, middle, dim, gi, gf, dirr, heads)
+    assert not (order[first:middle] == np.arange(first, middle)).all()
+    np.testing.assert_array_equal(pts[:middle], grown[order[:middle]])
+    np.testing.assert_array_equal(pts[:first], sorted_rows)
+    assert gathered(pts, middle, order, nxt, grid) == expected(middle)
+    check_runs(pts, middle, nxt, grid)
+    grid = cells.build_grid(dim, line, size, need, pts, n, nxt, 0)  # as after a rebuild: every row pushed in turn
+    cells.sort_tail(pts, order, nxt, first, n, dim, grid[0], grid[1], grid[6], grid[7])
+    np.testing.assert_array_equal(pts, grown[order])
+    np.testing.assert_array_equal(pts[:first], sorted_rows)
+    assert gathered(pts, n, order, nxt, grid) == expected(n)
+    check_runs(pts, n, nxt, grid)
+
+
 def test_a_3d_cluster_grown_in_sorted_rows_keeps_its_parents_and_contacts():
     """Past ``SORT_FIRST`` particles a 3D cluster's rows are stored cell after cell
     (``grow.BY_CELL``) and sorted again as it grows: what comes out is still in

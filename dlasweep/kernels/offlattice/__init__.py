@@ -64,8 +64,9 @@ the Generator, so a cluster is a function of its seed.
 
 Memory: besides the points (16 or 24 bytes each), the diffusion times (4),
 the parents (4), the cell-list links (4) and in 3D the attachment number of
-each stored row (4: the rows are kept cell after cell, ``cells.sort_cells``,
-so that a gather reads a cell's particles from one stretch), the grids take about a bit per unit cell
+each stored row (4: the rows are kept cell after cell, ``cells.sort_cells``
+and ``cells.sort_tail``, so that a gather reads a cell's particles from a stretch or two;
+``sort_tail`` holds 12 bytes a row attached since the last full sort, a fifth at most), the grids take about a bit per unit cell
 (maps), a byte per cell of side ``2**FS`` (centre field) and 4 bytes per tile of
 64 cell-list cells (directory) over a square ``GROW`` times the cluster's
 extent, and 256 bytes per tile that holds particles. When the cluster
