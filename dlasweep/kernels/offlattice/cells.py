@@ -190,13 +190,7 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
         h = nxt[i]
         nxt[i] = heads[h]  # the row particle i moves to
         heads[h] += 1
-    for i in range(count):
-        while nxt[i] != i:
-            j = nxt[i]
-            for a in range(dim):
-                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
-            order[i], order[j] = order[j], order[i]
-            nxt[i], nxt[j] = nxt[j], j
+    _move_rows(pts, order, nxt, 0, count, dim)
     first = 0
     for h in range(used):
         end = heads[h]  # one past the cell's last row
@@ -204,6 +198,19 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
         for i in range(first, end):
             nxt[i] = i + 1 if i + 1 < end else -1
         first = end
+
+
+@borrow
+def _move_rows(pts, order, nxt, first, count, dim):
+    """Move the rows first..count-1 of ``pts`` and ``order`` to the rows ``nxt`` names, in
+    place, cycle by cycle (``nxt`` of each then names its own row)."""
+    for i in range(first, count):
+        while nxt[i] != i:
+            j = nxt[i]
+            for a in range(dim):
+                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
+            order[i], order[j] = order[j], order[i]
+            nxt[i], nxt[j] = nxt[j], j
 
 
 @jit
@@ -247,13 +254,7 @@ def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
         k = nxt[i]
         nxt[i] = run[k]  # the row particle i moves to
         run[k] += 1
-    for i in range(first, count):
-        while nxt[i] != i:
-            j = nxt[i]
-            for a in range(dim):
-                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
-            order[i], order[j] = order[j], order[i]
-            nxt[i], nxt[j] = nxt[j], j
+    _move_rows(pts, order, nxt, first, count, dim)
     begin = first
     for k in range(seen):
         end = run[k]
