@@ -62,13 +62,14 @@ SORT_FIRST = 4096
 """Particles at the first sort (fewer fit in the caches whatever their order)."""
 SORT_GROWTH = 1.25
 """The rows are sorted again each time the cluster has grown by this factor: the newest
-particles, stored in attachment order, are a fifth of all. 3D 3e6, one after the other on one
+particles, sorted apart (``TAIL_SORT``), are a fifth of all at most. 3D 3e6, one after the other on one
 core (a benchmark on the other): 1.1 took 64.0 s against 60.9, 1.5 60.3 against 58.5."""
 TAIL_SORT = 32
 """Between sorts, the rows attached since the last are sorted by cell (``cells.sort_tail``) each
 time the cluster has grown by a ``TAIL_SORT``-th: walkers arrive where the cluster grows, and a
 gather read more than half its particles (3D 1e6, 14 of 27; 3e6, 16) from rows attached since the
-last sort, one scattered row each. 3D 1e7 side by side (seeds 1 and 2, the same clusters): 0.973
+last sort, one scattered row each; with these sorts, 3 of 27 are read from rows stored since
+the last. 3D 1e7 side by side (seeds 1 and 2, the same clusters): 0.973
 and 0.945 times the time, the sorts 7.6 s of 219 (alone on a core), the peak 18 MB higher."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
