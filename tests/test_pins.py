@@ -103,8 +103,11 @@ def test_walk_bound_is_map_dist(dim, line):
         want = cells.map_dist(w, dim, size, gi, words, start, blocks, cellz, field)
         moved = w.copy()
         got, ball, gap, shift = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field,
-                                                 fw, flo, ftop, pstart)
+                                                 fw, flo, ftop, pstart, False)
         assert got == want, (x, got, want)
+        # a walker from far reads the pyramid first: the same bound and ball
+        assert cells.walk_bound(w.copy(), dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop,
+                                pstart, True)[:2] == (got, ball), x
         if ball > 0.0:
             grid = moved[:dim] + np.array([m0, m1, m2][:dim])
             centre = ((grid.astype(np.int64) >> shift) << shift) + (1 << (shift - 1)) - np.array([m0, m1, m2][:dim])

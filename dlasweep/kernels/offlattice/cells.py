@@ -35,6 +35,7 @@ from ..centres import (
     _centre_lower,
     centre_bound,
     centre_gap,
+    field_reach,
     pyramid_ball,
     pyramid_dist,
     pyramid_lower,
@@ -485,6 +486,15 @@ def face_gap(X0, X1, X2, dim, s):
     return f
 
 
+FAR_CLEAR = tuple(field_reach(CCAP[d - 2]) + (1 << FS) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
+"""By dimension: where the centre pyramid bounds w's distance by this much, the coarse cells whose
+centres lie within a cell's diagonal of w (w's own and those ``centre_bound`` reads) are at the
+centre field's cap, every particle ``field_reach`` or more from their centres, and the field
+bounds less than the pyramid. A walker that comes from far (the launch circle, a return to it, a
+ball's exit) reads the pyramid first and, beyond this, not the field (``walk_bound``): the same
+bound and ball, the same clusters. Side by side (one core each, seeds 1 and 2): 2D 1e7 0.864 and
+0.918 times the time, 3D 3e6 0.877 (seed 1); 2D 1e6 1.012 and 1.014, 3D 1e6 1.002 and 1.091: the
+field's cells about the cluster's far walkers outgrow the caches."""
 NEAR = 2.0
 """Where the centre field bounds no more than this, the level-1 map decides:
 clear, every centre lies 2 or more away; set, the walker takes the neighbour list."""
@@ -572,13 +582,15 @@ def level_starts(gi, dim):
 
 
 @jit
-def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop, pstart):
+def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop, pstart, far):
     """``map_dist`` as the walk's hot loop computes it: the grid's constants
     from ``walk_geometry``, and w's periodic coordinates wrapped in place.
 
     ``grow._walk`` holds a copy of this body, spelled out (a call would cost
     reference counting, and numba's inlining cost as much).
 
+    With ``far`` (the walker comes from far) it reads the centre pyramid first, and the
+    centre field only where the pyramid's bound falls short of ``FAR_CLEAR``.
     It searches the map levels only where the field leaves them open: within
     ``NEAR`` only level 1, as a particle then lies in the coarse cells about
     w's and level FS is set; at the field's cap the pyramid bounds, or where
@@ -608,21 +620,31 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     shift = 0
     if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
         i0, i1, i2 = int(X0), int(X1), int(X2)
-        e, dm = centre_bound(field, dim, fw, X0, X1, X2)
         lo, hi = 0, 0
-        if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
-            dm = 0.0
-            hi = min(ftop, FS)
-        elif e == 0:
-            if len(pstart) > 2:
-                centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-                if shift > 0:
-                    gap = centre_gap(X0, X1, X2, dim, shift)
-                    if centre - gap > dm:
+        centre = 0.0
+        if far and len(pstart) > 2:
+            centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+            if shift > 0:
+                gap = centre_gap(X0, X1, X2, dim, shift)
+        if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field's cells about w at its cap: it bounds less
+            dm = centre - gap
+            ball = centre
+        else:
+            e, dm = centre_bound(field, dim, fw, X0, X1, X2)
+            if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
+                dm = 0.0
+                hi = min(ftop, FS)
+            elif e == 0:
+                if len(pstart) > 2:
+                    if not far:
+                        centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+                        if shift > 0:
+                            gap = centre_gap(X0, X1, X2, dim, shift)
+                    if shift > 0 and centre - gap > dm:
                         dm = centre - gap
                         ball = centre
-            else:
-                lo, hi = flo, ftop
+                else:
+                    lo, hi = flo, ftop
         while hi - lo > 1:
             s = (lo + hi) >> 1
             j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s

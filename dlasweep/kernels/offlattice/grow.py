@@ -22,6 +22,7 @@ from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, 
 from ..walk import ball_exit, return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .cells import (
     COVERED,
+    FAR_CLEAR,
     INF,
     NEAR,
     TILES_USED,
@@ -169,6 +170,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
         s0, s1, s2, s3 = _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3)
         list_ok = False
         nl = 0
+        far = True  # from the launch circle, a return to it or a ball's exit: the pyramid first (``cells.FAR_CLEAR``)
         while True:
             if max_steps > 0 and total >= max_steps:
                 code = 2
@@ -194,6 +196,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                     total += 1
                     pending += 1
                     list_ok = False
+                    far = True
                     if not return_to_sphere(rng, dim, w, launch_r, scratch):
                         break  # escaped (3D): release a new walker
                     continue
@@ -248,21 +251,31 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                 shift = 0
                 if 0.0 <= X0 < W and 0.0 <= X1 < W and 0.0 <= X2 < W:
                     i0, i1, i2 = int(X0), int(X1), int(X2)
-                    e, dm = centre_bound(field, dim, fw, X0, X1, X2)
                     lo, hi = 0, 0
-                    if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
-                        dm = 0.0
-                        hi = min(ftop, FS)
-                    elif e == 0:
-                        if len(pstart) > 2:
-                            centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-                            if shift > 0:
-                                gap = centre_gap(X0, X1, X2, dim, shift)
-                                if centre - gap > dm:
+                    centre = 0.0
+                    if far and len(pstart) > 2:
+                        centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+                        if shift > 0:
+                            gap = centre_gap(X0, X1, X2, dim, shift)
+                    if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field's cells about w at its cap: it bounds less
+                        dm = centre - gap
+                        ball = centre
+                    else:
+                        e, dm = centre_bound(field, dim, fw, X0, X1, X2)
+                        if dm <= NEAR:  # a particle in the coarse cells about w's: level FS set, level 1 alone open
+                            dm = 0.0
+                            hi = min(ftop, FS)
+                        elif e == 0:
+                            if len(pstart) > 2:
+                                if not far:
+                                    centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
+                                    if shift > 0:
+                                        gap = centre_gap(X0, X1, X2, dim, shift)
+                                if shift > 0 and centre - gap > dm:
                                     dm = centre - gap
                                     ball = centre
-                        else:
-                            lo, hi = flo, ftop
+                            else:
+                                lo, hi = flo, ftop
                     while hi - lo > 1:
                         s = (lo + hi) >> 1
                         j0, j1, j2 = i0 >> s, i1 >> s, i2 >> s
@@ -293,6 +306,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
             if line:
                 g = min(g, w[up])
             g = min(g, gb)
+            far = False
             # ---- move
             if not exact and ball > 0.0 and g == ball - gap - 1.0 and gb >= ball + gap and step == 0.0 and jumps:
                 # out of the ball about the pyramid cell's centre, which holds the one about w
@@ -301,6 +315,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                 c1 = float((int(X1) >> shift) << shift) + h - m1
                 c2 = float((int(X2) >> shift) << shift) + h - m2 if dim == 3 else 0.0
                 s0, s1, s2, s3 = ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, ball - 1.0)
+                far = True
                 total += 1
                 pending += 1
                 continue
