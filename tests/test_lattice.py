@@ -355,7 +355,11 @@ def test_distance_bound_is_zero_near_the_cluster_and_a_lower_bound_beyond(dim, w
     for q in np.rint(points[rng.integers(0, len(points), 3000)] + rng.normal(0, 1, (3000, dim)) * scale[:, None]):
         truth = np.abs(points - q).max(1).min()
         ijk = [int(x) + off for x in q] + [off] * (3 - dim)
-        d, far = _distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk)
+        d, far = _distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
+                                 False)
+        # a walker from a far jump reads the pyramid first: the same bounds
+        assert _distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
+                               True) == (d, far), q
         if not all(0 <= x < width for x in ijk):
             assert d == 5 and far == 0
             seen.add("off the grid")

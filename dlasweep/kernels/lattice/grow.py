@@ -54,6 +54,10 @@ from .words import (
 
 JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
 CIRCLE_MIN = 16.0  # smallest Brownian jump: below it the exact square jumps do the work
+FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
+"""By dimension: where the centre pyramid bounds a site's distance by this much, no held coarse cell
+lies within the field's cap of the site's (a particle in one would lie within cap coarse cells less
+a site on every axis): a walker from a far jump reads the pyramid alone (``_distance_bound``)."""
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into _attach
 
 
@@ -245,7 +249,7 @@ def _release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
 
 
 @borrow
-def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, i, j, k):
+def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, i, j, k, from_far):
     """Lower bounds of the distance from grid site (i, j, k) to the cluster:
     Chebyshev, 0 when a particle may lie within two sites, and Euclidean from
     beyond the field's reach, 0 within it.
@@ -254,10 +258,13 @@ def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap,
     ``fine3``), else the coarse field's (whole cells of ``2**FIELD_SHIFT``
     between), 5 off the grid; where the field is at its cap, the centre pyramid
     above it bounds the Euclidean distance (``centres.pyramid_dist``). ``_grow``
-    holds a copy of this body, spelled out. The pyramid read first after a far
-    jump, and the field's cell only where the pyramid's bound leaves a particle
-    within the field's cap (the same clusters), took 1.010 and 0.984 times the
-    time at 2D 1e7 (seeds 1 and 2, side by side): far jumps do not wait on it.
+    holds a copy of this body, spelled out. With ``from_far`` (the walker was
+    released, returned or took a Brownian jump) the pyramid is read first, and
+    the field's cell only where the pyramid's bound falls short of
+    ``FAR_CLEAR`` (the same bounds, the same clusters): side by side (seeds 1
+    and 2), 2D 1e7 0.939 and 0.922 times the time, 3D 3e6 0.913 and 0.995, 3D
+    1e7 1.015 (seed 1), on a host whose memory slows the large clusters more
+    (2D 1e7 on an earlier host: 1.010 and 0.984).
 
     Returns
     -------
@@ -267,10 +274,16 @@ def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap,
     d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
     far = 0.0
     if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-        ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-        cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
-        if cell == cap and len(levels) > 2:
+        if from_far and len(levels) > 2:
             far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
+        cell = cap
+        if far < FAR_CLEAR[dim]:
+            ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+            cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+            if cell < cap:
+                far = 0.0
+            elif not from_far and len(levels) > 2:
+                far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
         if cell > 1:
             d = ((cell - 1) << maps.FIELD_SHIFT) + 1
         else:
@@ -412,6 +425,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
         # one walker's moves until it sticks, leaves, or spends the budget;
         # the stream's state lives in registers meanwhile
         s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
+        from_far = True  # released, returned, or past a Brownian jump: the pyramid first (``FAR_CLEAR``)
         while budget != 0:
             r = pos[up] if line else np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
             if kill and r > kill_r:
@@ -426,6 +440,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
                 elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
                     need_launch = True
                     break
+                from_far = True
                 continue
             for a in range(3):
                 q[a] = _site(pos[a])
@@ -451,10 +466,16 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
             d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
             far = 0.0
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
-                ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-                cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
-                if cell == cap and len(levels) > 2:
+                if from_far and len(levels) > 2:
                     far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
+                cell = cap
+                if far < FAR_CLEAR[dim]:
+                    ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
+                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+                    if cell < cap:
+                        far = 0.0
+                    elif not from_far and len(levels) > 2:
+                        far = pyramid_dist(field, levels, dim, width, float(i), float(j), float(k))
                 if cell > 1:
                     d = ((cell - 1) << maps.FIELD_SHIFT) + 1
                 else:
@@ -473,6 +494,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
                     else:
                         d = fine3(words, nb0, i, j, k)
             # <<< _distance_bound
+            from_far = False
             if d == 0 or (line and q[up] <= 1):
                 # >>> touches, then step_to, spelled out: calls that pass arrays
                 # would cost reference counting (a test holds the texts together)
@@ -538,7 +560,8 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
             total += 1
             pending += 1
             budget -= 1
-            if reach >= CIRCLE_MIN and reach > half:
+            from_far = reach >= CIRCLE_MIN and reach > half
+            if from_far:
                 if square >= reach:  # the square (cube) reaches as far as the circle, and holds more
                     s0, s1, s2, s3, u0, u1, u2 = square_exit(s0, s1, s2, s3, dim)
                 else:
