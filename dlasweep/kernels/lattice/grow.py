@@ -279,7 +279,8 @@ def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap,
         cell = cap
         if far < FAR_CLEAR[dim]:
             ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-            cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+            ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
+            cell = cap - np.int64(field[maps.field_cell(dim, fw0, ci, cj, ck)])
             if cell < cap:
                 far = 0.0
             elif not from_far and len(levels) > 2:
@@ -471,7 +472,8 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
                 cell = cap
                 if far < FAR_CLEAR[dim]:
                     ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
-                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT, ck)])
+                    ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
+                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, ci, cj, ck)])
                     if cell < cap:
                         far = 0.0
                     elif not from_far and len(levels) > 2:

@@ -626,7 +626,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
             if shift > 0:
                 gap = centre_gap(X0, X1, X2, dim, shift)
-        if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field's cells about w at its cap: it bounds less
+        if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field about w at its cap bounds less
             dm = centre - gap
             ball = centre
         else:
