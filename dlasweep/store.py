@@ -11,6 +11,8 @@ import contextvars
 import datetime
 import os
 import shlex
+import signal
+import threading
 from pathlib import Path
 
 import netCDF4
@@ -288,9 +290,10 @@ class ParticleWriter:
                 self._flush()
 
     def _flush(self):
-        for name, var in self._variables.items():
-            var[self.written:self.written + self._filled] = self._buffer[name][: self._filled]
-        self.written, self._filled = self.written + self._filled, 0
+        with _signals_held():
+            for name, var in self._variables.items():
+                var[self.written:self.written + self._filled] = self._buffer[name][: self._filled]
+            self.written, self._filled = self.written + self._filled, 0
 
     def finish(self, ds: xr.Dataset, path):
         """Write the rest of ``ds`` (all but its per-particle variables) and rename the file to ``path``."""
@@ -313,7 +316,9 @@ class ParticleWriter:
                 enc["dtype"] = "i1"  # flags, without xarray's own dtype attribute: see CF
             encoding[name] = enc
         # unlimited_dims: not the ``particle`` of a dataset opened from a file, which the file has
-        rest.to_netcdf(self.tmp, mode="a", engine="netcdf4", format="NETCDF4", encoding=encoding, unlimited_dims=[])
+        with _signals_held():
+            rest.to_netcdf(self.tmp, mode="a", engine="netcdf4", format="NETCDF4", encoding=encoding,
+                           unlimited_dims=[])
         os.replace(self.tmp, path)
 
     def discard(self):
@@ -321,6 +326,33 @@ class ParticleWriter:
         if self._nc.isopen():
             self._nc.close()
         self.tmp.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Ctrl-C and a SIGTERM handled in Python held back until the block's netCDF writes end, then raised.
+
+    netCDF4's indexing runs Python code under bare ``except:`` clauses (``utils._StartCountStride``):
+    a ``KeyboardInterrupt`` raised there was swallowed, and the sweep ran on to its end (about 1 interrupt
+    in 100 sent while clusters were written). Only the main thread runs signal handlers; other threads
+    need no hold.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = []
+    handlers = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        if callable(signal.getsignal(signum)):
+            handlers[signum] = signal.signal(signum, lambda *received: held.append(received))
+    try:
+        yield
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
+        if held:
+            signum, frame = held[0]
+            handlers[signum](signum, frame)
 
 
 def open_sweep(path, chunks=None) -> xr.Dataset:

@@ -128,6 +128,47 @@ def test_ctrl_c_that_python_must_ignore_still_ends_the_command(script, tmp_path)
     assert done.returncode == 130 and done.stderr == "dlasweep grow: interrupted\n", done.stderr
 
 
+SWALLOWED_WHILE_WRITING = """
+import os, signal, sys, time
+import numpy as np
+import netCDF4._netCDF4 as core
+from dlasweep import schema, store
+
+signum = getattr(signal, sys.argv[1])
+if signum != signal.SIGINT:  # a handler such as ``dlasweep slurm``'s
+    signal.signal(signum, signal.default_int_handler)
+index = core._StartCountStride
+
+def swallowing(*args, **kwargs):
+    try:
+        os.kill(os.getpid(), signum)
+        time.sleep(5)
+    except:  # as netCDF4's own indexing does (bare excepts in utils._StartCountStride)
+        pass
+    return index(*args, **kwargs)
+
+core._StartCountStride = swallowing
+writer = store.ParticleWriter("clusters.nc", schema.ragged_columns(["offlattice"], [2]))
+n = store.PARTICLE_CHUNK + 1
+try:
+    writer.add(np.zeros((n, 2)), np.zeros(n, np.uint32), np.arange(n, dtype=np.int32) - 1)
+except KeyboardInterrupt:
+    print("interrupted after", writer.written)
+else:
+    print("ran on")
+"""
+
+
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_a_signal_that_netcdf_would_swallow_is_raised_once_the_write_ends(signame, tmp_path):
+    # CI met it: Ctrl-C landed in netCDF4's indexing while a finished cluster was written, and the sweep
+    # ran on to its end. Here it lands there every time.
+    done = subprocess.run([sys.executable, "-c", SWALLOWED_WHILE_WRITING, signame], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert done.stdout == "interrupted after 65536\n", done.stdout + done.stderr
+
+
 def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
     (tmp_path / "long.toml").write_text("[grid]\nn_particles = [300000]\nseeds = 4\n")
     status, err, seconds = interrupt(["sweep", "long.toml", "-o", "long.nc"], tmp_path)
