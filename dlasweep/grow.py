@@ -193,7 +193,7 @@ def _waited(call, between=None):
     worker.start()
     while worker.is_alive():
         worker.join(WATCH_SECONDS)
-        if STOP.is_set():
+        if STOP.is_set() and worker.is_alive():  # a growth that ended meanwhile is kept
             raise Interrupted("growth given up: the sweep was interrupted")
         if between is not None:
             between()

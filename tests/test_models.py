@@ -225,6 +225,21 @@ def test_a_waiting_growth_gives_up_within_a_watch_once_stop_is_set(monkeypatch, 
     assert dla.grow(100, 0).n == 100  # STOP cleared: growth as before
 
 
+def test_a_growth_that_ended_as_stop_was_set_is_kept(monkeypatch):
+    growing = importlib.import_module("dlasweep.grow")
+    kernel = growing.KERNELS["lattice"]
+
+    def stopping(n, p, marks, rngs):
+        growing.STOP.set()  # the sweep interrupted while this growth's last stretch ran
+        return kernel(n, p, marks, rngs)
+
+    monkeypatch.setitem(growing.KERNELS, "lattice", stopping)
+    try:
+        assert [c.n for c in growing.grow_many(100, [1, 2])] == [100, 100]
+    finally:
+        growing.STOP.clear()
+
+
 @pytest.mark.parametrize("kw", [{"model": "lattice"}, {"model": "offlattice"}, {"model": "lattice", "dim": 3},
                                 {"model": "offlattice", "size": 30}, {"model": "lattice", "walkers": 4, "size": 60}])
 def test_grow_many_grows_the_clusters_grow_grows_one_by_one(kw):
