@@ -330,15 +330,16 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     value puts the one below at least its cap away, less the way between their
     centres, ends it unread), took 1.027 and 1.096 times the time at 2D 1e7, 0.968
     and 1.027 at 3D 3e6 (seeds 1 and 2, the same clusters, side by side)."""
-    centre, shift = pyramid_ball(field, pstart, dim, W, X0, X1, X2)
-    return centre - centre_gap(X0, X1, X2, dim, shift) if shift > 0 else 0.0
+    centre, _, gap = pyramid_ball(field, pstart, dim, W, X0, X1, X2)
+    return centre - gap
 
 
 @borrow
 def pyramid_ball(field, pstart, dim, W, X0, X1, X2):
     """The distance from the centre of grid point X's cell in the first level of the centre
-    pyramid above the field below its cap to every particle, and that level's shift (its
-    cells have side ``2**shift``); 0.0 and 0 when all are at their cap.
+    pyramid above the field below its cap to every particle, that level's shift (its cells
+    have side ``2**shift``) and X's distance to that centre (``centre_gap``); 0.0, 0 and 0.0
+    when all are at their cap.
 
     A ball about that centre holds no particle: the off-lattice walk jumps out of it
     (``walk.ball_exit``) where it is larger than the ball about X."""
@@ -349,5 +350,6 @@ def pyramid_ball(field, pstart, dim, W, X0, X1, X2):
         e = np.int64(field[pstart[level] + maps.field_cell(dim, fw, int(X0) >> shift, int(X1) >> shift,
                                                            (int(X2) >> shift) if dim == 3 else 0)])
         if e > 0:
-            return (LEVEL_TOP[dim] - e) * (float(1 << shift) / LEVEL_UNITS[dim]), shift
-    return 0.0, 0
+            centre = (LEVEL_TOP[dim] - e) * (float(1 << shift) / LEVEL_UNITS[dim])
+            return centre, shift, centre_gap(X0, X1, X2, dim, shift)
+    return 0.0, 0, 0.0

@@ -34,7 +34,6 @@ from ..centres import (
     FS,
     _centre_lower,
     centre_bound,
-    centre_gap,
     field_reach,
     pyramid_ball,
     pyramid_dist,
@@ -599,7 +598,8 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
 
     Returns the bound, and where the pyramid gives it, the radius of the ball about the centre
     of w's cell of the pyramid level that holds no particle centre, w's distance to that centre
-    and the level's shift (else 0.0, 0.0, 0), from which the walk jumps out of that ball.
+    and the level's shift, from which the walk jumps out of that ball; elsewhere a radius of 0.0
+    (the distance and shift are then those of a pyramid read that gave no bound, or 0.0 and 0).
     """
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
@@ -623,9 +623,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
         lo, hi = 0, 0
         centre = 0.0
         if far and len(pstart) > 2:
-            centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-            if shift > 0:
-                gap = centre_gap(X0, X1, X2, dim, shift)
+            centre, shift, gap = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
         if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field about w at its cap bounds less
             dm = centre - gap
             ball = centre
@@ -637,9 +635,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             elif e == 0:
                 if len(pstart) > 2:
                     if not far:
-                        centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-                        if shift > 0:
-                            gap = centre_gap(X0, X1, X2, dim, shift)
+                        centre, shift, gap = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
                     if shift > 0 and centre - gap > dm:
                         dm = centre - gap
                         ball = centre

@@ -41,7 +41,7 @@ from .cells import (
     sort_tail,
     walk_geometry,
 )
-from ..centres import FS, centre_bound, centre_gap, pyramid_ball
+from ..centres import FS, centre_bound, pyramid_ball
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -254,9 +254,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                     lo, hi = 0, 0
                     centre = 0.0
                     if far and len(pstart) > 2:
-                        centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-                        if shift > 0:
-                            gap = centre_gap(X0, X1, X2, dim, shift)
+                        centre, shift, gap = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
                     if shift > 0 and centre - gap >= FAR_CLEAR[dim]:  # the field about w at its cap bounds less
                         dm = centre - gap
                         ball = centre
@@ -268,9 +266,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
                         elif e == 0:
                             if len(pstart) > 2:
                                 if not far:
-                                    centre, shift = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
-                                    if shift > 0:
-                                        gap = centre_gap(X0, X1, X2, dim, shift)
+                                    centre, shift, gap = pyramid_ball(field, pstart, dim, int(W), X0, X1, X2)
                                 if shift > 0 and centre - gap > dm:
                                     dm = centre - gap
                                     ball = centre
