@@ -4,6 +4,7 @@ import os
 import re
 import subprocess
 import sys
+import threading
 
 import cf_xarray  # noqa: F401  (registers ds.cf)
 import netCDF4
@@ -347,6 +348,29 @@ def test_streamed_clusters_fill_whole_compressed_chunks(tmp_path, monkeypatch):
             assert "_FillValue" not in nc[name].ncattrs()
     np.testing.assert_array_equal(whole["x"].values, np.concatenate([p[:, 0] for p, _, _ in clusters]))
     np.testing.assert_array_equal(whole["parent"].values, np.concatenate([parents for _, _, parents in clusters]))
+
+
+def test_a_file_is_streamed_from_a_thread_as_from_the_main_thread(tmp_path, monkeypatch):
+    # Signals are held over netCDF writes (``store._signals_held``) in the main thread only: a
+    # handler can be set nowhere else, and no handler runs elsewhere.
+    monkeypatch.setattr(store, "PARTICLE_CHUNK", 5)
+    ds, clusters = synthetic_parts()
+    paths = {where: tmp_path / f"{where}.nc" for where in ("main", "thread")}
+    store.save(ds, paths["main"], iter(clusters))
+    errors = []
+    worker = threading.Thread(target=lambda: _caught(errors, store.save, ds, paths["thread"], iter(clusters)))
+    worker.start()
+    worker.join()
+    assert not errors, errors
+    with store.open_sweep(paths["main"]) as main, store.open_sweep(paths["thread"]) as thread:
+        xr.testing.assert_identical(thread.drop_attrs(deep=False), main.drop_attrs(deep=False))
+
+
+def _caught(errors, call, *args):
+    try:
+        call(*args)
+    except Exception as err:  # noqa: BLE001 (reported by the test, in its own thread)
+        errors.append(err)
 
 
 def test_particle_writer_writes_whole_chunks_as_soon_as_full(tmp_path, monkeypatch):
