@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from . import store
+from .host import READS, latency_line, read_latency
 from .schema import Variable
 
 MIB = "2^20 byte"
@@ -194,6 +195,9 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         ratio = t["naive"] / t["exact"]
         ds.attrs[f"naive_over_exact_{n}"] = ratio
         echo(f"lattice-2d N={n}: naive walk takes {ratio:.1f}x the time of the exact-jump kernel")
+    latency = read_latency(reads=READS // 10 if quick else READS)  # after the runs, on the same quiet host
+    ds.attrs.update(host_read_mib=list(latency), host_read_ns=list(latency.values()))
+    echo(latency_line(latency))
     if full:
         for line in target_table(ds):
             echo(line)

@@ -13,6 +13,7 @@ from .analysis import summarise
 from .bench import exponent_attribute
 from .config import LEVEL
 from .fit import fit_mass_radius
+from .host import latency_line
 from .measure import radius_of_gyration
 
 
@@ -81,8 +82,11 @@ def _bench(ds) -> list:
         rows.append([name, _values(np.sort(n[exact])), f"{n[top]}", f"{float(ds['seconds'][top]):.3g}",
                      f"{float(ds['peak_memory'][top]):.0f}", "" if exponent is None else f"{exponent:.2f}"])
     ratios = {k.removeprefix("naive_over_exact_"): v for k, v in ds.attrs.items() if k.startswith("naive_over_exact_")}
+    host = ([latency_line(dict(zip(np.atleast_1d(ds.attrs["host_read_mib"]), np.atleast_1d(ds.attrs["host_read_ns"]))))]
+            if "host_read_ns" in ds.attrs else [])
     return [*lines, *_table(["model", "N (exact)", "largest", "seconds", "peak MiB", "time ~ N^"], rows),
-            "naive walk / exact jumps, time: " + (", ".join(f"N={k} {v:.1f}x" for k, v in ratios.items()) or "none")]
+            "naive walk / exact jumps, time: " + (", ".join(f"N={k} {v:.1f}x" for k, v in ratios.items()) or "none"),
+            *host]
 
 
 def _table(header, rows) -> list:

@@ -11,6 +11,7 @@ def test_bench_quick_writes_its_outputs(tmp_path):
     from matplotlib.image import imread
 
     from dlasweep.bench import BENCH_SCHEMA
+    from dlasweep.host import WORKING_SETS
     from dlasweep.schema import attributes
 
     out = tmp_path / "bench"
@@ -23,6 +24,7 @@ def test_bench_quick_writes_its_outputs(tmp_path):
             assert {k: ds[name].attrs[k] for k in attributes(name, schema=BENCH_SCHEMA)} == attributes(
                 name, schema=BENCH_SCHEMA), name
         runs = ds.sizes["run"]
+        assert list(ds.attrs["host_read_mib"]) == list(WORKING_SETS) and (ds.attrs["host_read_ns"] > 0).all()
     # The log: the command, a header, then one line per run: model, method, N.
     lines = (out / "bench.txt").read_text().splitlines()
     assert lines[0].startswith("$ dlasweep bench")

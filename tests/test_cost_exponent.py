@@ -47,6 +47,10 @@ def test_summary_gives_each_round_their_mean_and_the_verdict_only_for_the_target
     assert two[4] == "1.06 (over, rounds on both sides) |"  # the rounds' mean, over its target of 1.06
     assert three[2:5] == ["1.200 (0.060)", "1.200", "1.1 (over) |"]
     assert small[1] == "1e4 to 1e6" and small[4] == "1.06 is for 1e5 to 1e7 |"  # no verdict off the targets' N
+    hosts = {"before": {1.0: 10.0, 64.0: 150.0}, "after": {1.0: 11.0, 64.0: 160.0}}
+    lines = expo.summary(rows, "cmd", hosts).splitlines()
+    assert lines[-2:] == ["- before: host memory, ns a read waiting on the last: 1 MiB 10.0, 64 MiB 150.0",
+                          "- after: host memory, ns a read waiting on the last: 1 MiB 11.0, 64 MiB 160.0"]
 
 
 @pytest.mark.skipif(len(expo.cores()) < 2, reason="the two sides need two cores")
@@ -56,4 +60,7 @@ def test_a_small_round_writes_its_row_and_table(tmp_path):
     assert row["model"] == "lattice-2d" and int(row["long_n"]) == 2000 and int(row["short_runs"]) >= 1
     assert float(row["long_ns"]) > 0 and float(row["short_steps"]) > 1  # a walk takes steps
     exponent = 1 + math.log(float(row["long_ns"]) / float(row["short_ns"])) / math.log(4)
-    assert f"{exponent:.3f}" in (tmp_path / "cost_exponent.md").read_text()
+    table = (tmp_path / "cost_exponent.md").read_text()
+    assert f"{exponent:.3f}" in table
+    assert [line.split(":")[0] for line in table.splitlines() if "host memory" in line] == [
+        "- before the rounds", "- after them"]

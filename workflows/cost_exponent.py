@@ -15,7 +15,8 @@ swap the cores. Both sides time CPU seconds of ``grow`` after a warm-up
 and its steps' part the same with the mean steps a particle. It writes
 ``cost_exponent.csv`` (a row per round and model, as each ends) and ``cost_exponent.md``
 (each round's exponent, their mean and ``dlasweep.bench.TARGETS``'
-target) into the output folder. Needs two cores (Linux: it pins the sides).
+target, and the host's memory before and after the rounds, ``dlasweep.host``)
+into the output folder. Needs two cores (Linux: it pins the sides).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import tempfile
 from pathlib import Path
 
 from dlasweep.bench import MODELS, SCALING, TARGETS
+from dlasweep.host import latency_line, read_latency
 
 _SIDE = """
 import json, os, sys, time
@@ -97,8 +99,9 @@ def _label(n: float) -> str:
     return f"{n:.0e}".replace("+0", "").replace("+", "")
 
 
-def summary(rows: list[dict], command: str) -> str:
-    """A markdown table: each model's rounds, their mean and its target."""
+def summary(rows: list[dict], command: str, hosts: dict | None = None) -> str:
+    """A markdown table: each model's rounds, their mean and its target; under it the host's
+    memory (``dlasweep.host.read_latency``) as measured at each of ``hosts``' moments."""
     lines = [f"`{command}`", "",
              "| model | N | rounds: cost exponent (steps' part) | mean | target |", "|---|---|---|---|---|"]
     for name in dict.fromkeys(row["model"] for row in rows):
@@ -112,6 +115,9 @@ def summary(rows: list[dict], command: str) -> str:
                    if scaling else f"{target} is for {_label(SCALING[0])} to {_label(SCALING[1])}")
         lines.append(f"| {name} | {_label(mine[0]['short_n'])} to {_label(mine[0]['long_n'])} | "
                      + ", ".join(f"{e:.3f} ({s:.3f})" for e, s in each) + f" | {mean:.3f} | {verdict} |")
+    if hosts:
+        lines.append("")
+        lines += [f"- {moment}: {latency_line(latency)}" for moment, latency in hosts.items()]
     return "\n".join(lines) + "\n"
 
 
@@ -133,6 +139,8 @@ def main(argv=None) -> None:
     pair = cores()[:2]
     if len(pair) < 2:
         parser.error("needs two cores: one for each side")
+    hosts = {"before the rounds": read_latency()}  # both cores idle
+    print(latency_line(hosts["before the rounds"]), flush=True)
     rows = []
     for name in args.models:
         for k in range(args.rounds):
@@ -147,7 +155,8 @@ def main(argv=None) -> None:
                 writer = csv.DictWriter(f, fieldnames=list(row))
                 writer.writeheader()
                 writer.writerows(rows)
-    table = summary(rows, "workflows/cost_exponent.py " + " ".join(argv if argv is not None else sys.argv[1:]))
+    hosts["after them"] = read_latency()
+    table = summary(rows, "workflows/cost_exponent.py " + " ".join(argv if argv is not None else sys.argv[1:]), hosts)
     (args.out / "cost_exponent.md").write_text(table)
     print(table, end="")
 

@@ -1,0 +1,76 @@
+"""The host's memory as a growing cluster meets it: the time of a read that waits on the one before.
+
+A walker reads the grids near it at places it cannot know ahead, each read
+waiting on the last. While the grids fit the caches such a read costs a few
+nanoseconds; once they outgrow them, a trip to memory. Where that happens
+and what it costs are the host's, not the kernel's, and they move a cost
+exponent (``bench.cost_exponent``) by more than its targets' margins: the same
+kernels measured 1.066 and 1.129 (2D lattice, 1e5 to 1e7) on two hosts a day
+apart. ``dlasweep bench`` and ``workflows/cost_exponent.py`` measure it in the
+same run as their clusters, so that rows from different hosts can be told apart.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ._jit import jit
+
+LINE = 64
+"""Bytes of a cache line: the chain visits one word in each."""
+WORKING_SETS = (0.25, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0)
+"""MiB: from inside a core's level-2 cache to well past any last-level cache."""
+READS = 1_000_000
+"""Reads timed at each working set (a round), after as many untimed ones that bring it in."""
+ROUNDS = 3
+
+
+def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = ROUNDS, seed: int = 0) -> dict:
+    """Nanoseconds a read, by working set in MiB: the median of ``rounds`` timed walks of ``reads``
+    steps along one chain through every cache line of the set, in random order.
+
+    Each read's address is the value the one before returned, so the processor
+    can neither overlap them nor guess the next: a walker's own reads of a grid
+    it has outgrown. The arrays come from numpy, which asks Linux for huge
+    pages where it may.
+    """
+    rng = np.random.default_rng(seed)
+    latency = {}
+    for mib in working_sets:
+        chain = one_cycle(max(int(mib * 2**20) // LINE, 2), rng)
+        _walk(chain, 0, reads)
+        latency[float(mib)] = float(np.median([_timed_walk(chain, reads) for _ in range(rounds)])) / reads
+    return latency
+
+
+def one_cycle(lines: int, rng) -> np.ndarray:
+    """A chain through ``lines`` cache lines in random order: at each line's first word, the first word of
+    the next line on one cycle that visits them all (``LINE // 8`` int64 words a line)."""
+    stride = LINE // 8
+    order = rng.permutation(lines) * stride
+    chain = np.zeros(lines * stride, np.int64)
+    chain[order] = np.roll(order, -1)
+    return chain
+
+
+@jit
+def _walk(chain, at, reads):
+    """Follow the chain ``reads`` steps from word ``at``; returns where it ends."""
+    for _ in range(reads):
+        at = chain[at]
+    return at
+
+
+def _timed_walk(chain, reads) -> float:
+    """Nanoseconds of ``reads`` steps of the chain, compiled code only."""
+    start = time.perf_counter_ns()
+    _walk(chain, 0, reads)
+    return float(time.perf_counter_ns() - start)
+
+
+def latency_line(latency: dict) -> str:
+    """One line: 'a read waiting on the last, ns: 0.25 MiB 4.1, 1 MiB 9.8, ...'."""
+    return "host memory, ns a read waiting on the last: " + ", ".join(
+        f"{mib:g} MiB {ns:.1f}" for mib, ns in latency.items())
