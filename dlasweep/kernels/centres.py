@@ -209,13 +209,18 @@ def pyramid_lower(field, dim, W, i, j, k, levels):
     return -1
 
 
+@inline
+def cell_centre(X, shift):
+    """Where, along one axis, the grid point X's cell of side ``2**shift`` has its centre."""
+    return float((int(X) >> shift) << shift) + float(1 << (shift - 1))
+
+
 @jit
 def centre_gap(X0, X1, X2, dim, shift):
     """Distance from the grid point X to the centre of its cell of side ``2**shift``."""
-    h = float(1 << (shift - 1))
-    d0 = X0 - float((int(X0) >> shift) << shift) - h
-    d1 = X1 - float((int(X1) >> shift) << shift) - h
-    d2 = X2 - float((int(X2) >> shift) << shift) - h if dim == 3 else 0.0
+    d0 = X0 - cell_centre(X0, shift)
+    d1 = X1 - cell_centre(X1, shift)
+    d2 = X2 - cell_centre(X2, shift) if dim == 3 else 0.0
     return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
 
 

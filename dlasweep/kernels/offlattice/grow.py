@@ -41,7 +41,7 @@ from .cells import (
     sort_tail,
     walk_geometry,
 )
-from ..centres import FS, centre_bound, pyramid_ball
+from ..centres import FS, cell_centre, centre_bound, pyramid_ball
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
 
 LIST_RADIUS = 3.0
@@ -318,10 +318,9 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
             # ---- move
             if not exact and ball > 0.0 and g == ball - gap - 1.0 and gb >= ball + gap and step == 0.0 and jumps:
                 # out of the ball about the pyramid cell's centre, which holds the one about w
-                h = float(1 << (shift - 1))
-                c0 = float((int(X0) >> shift) << shift) + h - m0
-                c1 = float((int(X1) >> shift) << shift) + h - m1
-                c2 = float((int(X2) >> shift) << shift) + h - m2 if dim == 3 else 0.0
+                c0 = cell_centre(X0, shift) - m0
+                c1 = cell_centre(X1, shift) - m1
+                c2 = cell_centre(X2, shift) - m2 if dim == 3 else 0.0
                 s0, s1, s2, s3 = ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, ball - 1.0)
                 far = True
                 total += 1
