@@ -25,6 +25,7 @@ WORKING_SETS = (0.25, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0)
 READS = 1_000_000
 """Reads timed at each working set (a round), after as many untimed ones that bring it in."""
 ROUNDS = 3
+"""Timed walks at each working set, of which the median is kept: one slowed by another process is dropped."""
 
 
 def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = ROUNDS, seed: int = 0) -> dict:
@@ -71,6 +72,6 @@ def _timed_walk(chain, reads) -> float:
 
 
 def latency_line(latency: dict) -> str:
-    """One line: 'a read waiting on the last, ns: 0.25 MiB 4.1, 1 MiB 9.8, ...'."""
+    """One line of ``read_latency``'s figures: 'host memory, ns a read waiting on the last: 0.25 MiB 7.1, ...'."""
     return "host memory, ns a read waiting on the last: " + ", ".join(
         f"{mib:g} MiB {ns:.1f}" for mib, ns in latency.items())
