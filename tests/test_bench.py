@@ -134,6 +134,7 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
                 "peak_mb": 200.0, "added_mb": 1.0}
 
     monkeypatch.setattr(bench, "probe", fake_probe)
+    monkeypatch.setattr(bench, "read_latency", lambda reads: {1.0: 10.0})  # its own test: tests/test_host.py
     lines = []
     ds = bench.run_bench(full=True, echo=lines.append)
     lo, hi = bench.SCALING
