@@ -253,25 +253,26 @@ class ParticleWriter:
         cache = netCDF4.get_chunk_cache()
         # No chunk cache (netCDF's setting for the files it opens next): each whole
         # chunk is compressed as it is written, not all of them at close.
-        netCDF4.set_chunk_cache(0)
-        try:
-            self._nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
-            if columns:
-                self._nc.createDimension("particle", None)  # its length is known at the end
-            for name, dtype in columns.items():
-                # Never missing, so no fill value (as the counts).
-                var = self._nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB,
-                                              shuffle=shuffled(dtype), chunksizes=(PARTICLE_CHUNK,),
-                                              fill_value=False)
-                var.setncatts(attributes(name, dtype))
-                self._variables[name] = var
-                self._buffer[name] = np.empty(PARTICLE_CHUNK, dtype)
-            axes = [name for name in columns if name in AXES]
-            for name, var in self._variables.items():
-                if name not in axes:  # what xarray writes for the coordinates x, y (z) of a variable
-                    var.setncattr("coordinates", " ".join(axes))
-        finally:
-            netCDF4.set_chunk_cache(*cache)
+        with _signals_held():  # createVariable's lookup of dimensions (utils._find_dim) has bare excepts too
+            netCDF4.set_chunk_cache(0)
+            try:
+                self._nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
+                if columns:
+                    self._nc.createDimension("particle", None)  # its length is known at the end
+                for name, dtype in columns.items():
+                    # Never missing, so no fill value (as the counts).
+                    var = self._nc.createVariable(name, dtype, ("particle",), zlib=True, complevel=PARTICLE_ZLIB,
+                                                  shuffle=shuffled(dtype), chunksizes=(PARTICLE_CHUNK,),
+                                                  fill_value=False)
+                    var.setncatts(attributes(name, dtype))
+                    self._variables[name] = var
+                    self._buffer[name] = np.empty(PARTICLE_CHUNK, dtype)
+                axes = [name for name in columns if name in AXES]
+                for name, var in self._variables.items():
+                    if name not in axes:  # what xarray writes for the coordinates x, y (z) of a variable
+                        var.setncattr("coordinates", " ".join(axes))
+            finally:
+                netCDF4.set_chunk_cache(*cache)
 
     def add(self, points, times, parents):
         """Append one cluster: its points ``(n, dim)`` (2D ones get z = 0 among 3D columns), diffusion times and
@@ -330,7 +331,7 @@ class ParticleWriter:
 
 @contextlib.contextmanager
 def _signals_held():
-    """Ctrl-C and a SIGTERM handled in Python held back until the block's netCDF writes end, then raised.
+    """Ctrl-C and a SIGTERM handled in Python held back until the block's netCDF reads or writes end, then raised.
 
     netCDF4's indexing runs Python code under bare ``except:`` clauses (``utils._StartCountStride``):
     a ``KeyboardInterrupt`` raised there was swallowed, and the sweep ran on to its end (about 1 interrupt
@@ -375,26 +376,28 @@ def open_sweep(path, chunks=None) -> xr.Dataset:
     StoreError
         When the file is missing, not netCDF, truncated, or not from dlasweep.
     """
-    ds = _open(path, ("cluster_particles", "x", "y", "diffusion_time"), chunks)
-    try:
-        for var in ds.variables.values():
-            if "particle" not in var.dims:
-                var.load()
-    except Exception as err:
-        ds.close()
-        raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
+    with _signals_held():
+        ds = _open(path, ("cluster_particles", "x", "y", "diffusion_time"), chunks)
+        try:
+            for var in ds.variables.values():
+                if "particle" not in var.dims:
+                    var.load()
+        except Exception as err:
+            ds.close()
+            raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
     return _booleans(ds)
 
 
 def open_whole(path, required=()) -> xr.Dataset:
     """Open, and read whole, a small file dlasweep wrote (a benchmark's) with the variables ``required``;
     ``StoreError`` as ``open_sweep``."""
-    ds = _open(path, required)
-    try:
-        return ds.load()
-    except Exception as err:
-        ds.close()
-        raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
+    with _signals_held():
+        ds = _open(path, required)
+        try:
+            return ds.load()
+        except Exception as err:
+            ds.close()
+            raise StoreError(f"{path}: damaged or truncated ({one_line(err)})") from None
 
 
 def open_dataset(path) -> xr.Dataset:

@@ -172,6 +172,42 @@ def test_a_signal_that_netcdf_would_swallow_is_raised_once_the_write_ends(signam
     assert done.stdout == "interrupted after 65536\n", done.stdout + done.stderr
 
 
+SWALLOWED_WHILE_READING = """
+import os, signal, sys, time
+import netCDF4._netCDF4 as core
+import dlasweep as dla
+from dlasweep import export, store
+
+export.write_cluster(dla.grow(30, seed=1, model="lattice"), "c.nc")
+index = core._StartCountStride
+sent = []
+
+def swallowing(*args, **kwargs):
+    try:
+        if not sent:  # one Ctrl-C, at the first index call of the read
+            sent.append(signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)
+    except:  # as netCDF4's own indexing does
+        pass
+    return index(*args, **kwargs)
+
+core._StartCountStride = swallowing
+try:
+    store.open_sweep("c.nc")
+except KeyboardInterrupt:
+    print("interrupted", len(sent))
+else:
+    print("ran on", len(sent))
+"""
+
+
+def test_a_ctrl_c_that_netcdf_would_swallow_while_a_file_is_read_is_raised_once_it_is_read(tmp_path):
+    done = subprocess.run([sys.executable, "-c", SWALLOWED_WHILE_READING], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert done.stdout == "interrupted 1\n", done.stdout + done.stderr
+
+
 def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
     (tmp_path / "long.toml").write_text("[grid]\nn_particles = [300000]\nseeds = 4\n")
     status, err, seconds = interrupt(["sweep", "long.toml", "-o", "long.nc"], tmp_path)
