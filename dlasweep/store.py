@@ -402,7 +402,7 @@ def open_whole(path, required=()) -> xr.Dataset:
 
 def open_dataset(path) -> xr.Dataset:
     """Open any file dlasweep wrote: a benchmark (dimension ``run``) whole (``open_whole``), else ``open_sweep``."""
-    with _open(path, ()) as ds:
+    with _signals_held(), _open(path, ()) as ds:
         bench = "run" in ds.dims
     return open_whole(path) if bench else open_sweep(path)
 
