@@ -128,11 +128,12 @@ def test_ctrl_c_that_python_must_ignore_still_ends_the_command(script, tmp_path)
     assert done.returncode == 130 and done.stderr == "dlasweep grow: interrupted\n", done.stderr
 
 
-SWALLOWED_WHILE_WRITING = """
+SWALLOWING = """
 import os, signal, sys, time
 import numpy as np
 import netCDF4._netCDF4 as core
-from dlasweep import schema, store
+import dlasweep as dla
+from dlasweep import export, schema, store
 
 signum = getattr(signal, sys.argv[1])
 if signum != signal.SIGINT:  # a handler such as ``dlasweep slurm``'s
@@ -149,7 +150,11 @@ def swallowing(*args, **kwargs):
     except:  # as netCDF4's own indexing does (bare excepts in utils._StartCountStride)
         pass
     return index(*args, **kwargs)
+"""
+"""A script's start: ``swallowing`` sends the signal named by its first argument at netCDF4's first index call
+once it replaces ``core._StartCountStride``, and swallows it there."""
 
+SWALLOWED_WHILE_WRITING = SWALLOWING + """
 core._StartCountStride = swallowing
 writer = store.ParticleWriter("clusters.nc", schema.ragged_columns(["offlattice"], [2]))
 n = store.PARTICLE_CHUNK + 1
@@ -172,26 +177,8 @@ def test_a_signal_that_netcdf_would_swallow_is_raised_once_the_write_ends(signam
     assert done.stdout == "interrupted after 65536\n", done.stdout + done.stderr
 
 
-SWALLOWED_WHILE_READING = """
-import os, signal, sys, time
-import netCDF4._netCDF4 as core
-import dlasweep as dla
-from dlasweep import export, store
-
-export.write_cluster(dla.grow(30, seed=1, model="lattice"), "c.nc")
-index = core._StartCountStride
-sent = []
-
-def swallowing(*args, **kwargs):
-    try:
-        if not sent:  # one Ctrl-C, at the first index call of the read
-            sent.append(signal.SIGINT)
-            os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(1)
-    except:  # as netCDF4's own indexing does
-        pass
-    return index(*args, **kwargs)
-
+SWALLOWED_WHILE_READING = SWALLOWING + """
+export.write_cluster(dla.grow(30, seed=1, model="lattice"), "c.nc")  # before the index calls swallow
 core._StartCountStride = swallowing
 try:
     store.open_sweep("c.nc")
@@ -203,7 +190,7 @@ else:
 
 
 def test_a_ctrl_c_that_netcdf_would_swallow_while_a_file_is_read_is_raised_once_it_is_read(tmp_path):
-    done = subprocess.run([sys.executable, "-c", SWALLOWED_WHILE_READING], cwd=tmp_path, capture_output=True,
+    done = subprocess.run([sys.executable, "-c", SWALLOWED_WHILE_READING, "SIGINT"], cwd=tmp_path, capture_output=True,
                           text=True, timeout=300, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert done.stdout == "interrupted 1\n", done.stdout + done.stderr
 
