@@ -21,7 +21,7 @@ from dlasweep.kernels.lattice.exits import (
 )
 from dlasweep.kernels.walk import seed_stream
 from dlasweep.kernels.lattice.grow import _distance_bound, _release
-from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild
+from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild, regrow
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -438,3 +438,41 @@ def test_the_pyramid_bound_keeps_the_3d_clusters_of_the_maps_bound():
     for values, mean, spread in ((rg, 34.841, 0.0205), (ratio, 0.5195, 0.0504)):
         se = mean * spread * np.sqrt(2 / 16)
         assert abs(np.mean(values) - mean) < 3.5 * se, (np.mean(values), mean)
+
+
+@pytest.mark.parametrize("params", [dict(dim=2), dict(dim=3), dict(dim=2, seed_shape="block"),
+                                    dict(dim=2, neighbours=8), dict(dim=2, size=64, seed_shape="line")])
+def test_a_regrown_grid_is_the_grid_built_anew_bit_for_bit(params):
+    """``words.regrow`` (the words, the field and the pyramid's first level carried
+    over from the outgrown grid) gives every array of ``rebuild``'s grid for the
+    same particles, at each of a grown cluster's own regrids: its first m - 1
+    particles in a grid, the m-th past its edge. The old grid's whole pages go
+    back to the OS: they read zeros. A substrate's grid is built anew."""
+    pts = dla.grow(20_000 if params["dim"] == 2 else 25_000, seed=5, model="lattice", **params).points
+    dim, line = params["dim"], params.get("seed_shape") == "line"
+    period = params.get("size", 0) if line else 0
+    points = np.zeros((len(pts), 3), np.int64)
+    points[:, :dim] = pts
+    extent = np.abs(pts).max(1)
+    width, off = (4 * period, period) if line else (64, 32)
+    regrids = kept = 0
+    while True:
+        # ``_attach``'s rule: a particle within 4 sites of the edge (a substrate's: the top) outgrows the grid
+        past = (pts[:, dim - 1] + off + 4 >= width) if line else (extent + 4 >= off)
+        if not past.any():
+            break
+        m = int(np.argmax(past)) + 1
+        old = rebuild(points, m - 1, dim, width, off, period)
+        new_width = (2 * width + 15) // 16 * 16
+        new_off = off if line else new_width // 2
+        fresh = rebuild(points, m, dim, new_width, new_off, period)
+        carried = regrow(points, m, dim, new_width, new_off, period, (*old, width, off))
+        for name, a, b in zip(("words", "start", "blocks", "cells", "field"), fresh, carried):
+            np.testing.assert_array_equal(a, b, err_msg=f"{name} at {m} particles, width {new_width}")
+        for a in (old[0], old[4]):
+            lo, hi = -a.ctypes.data % maps.PAGE, (a.ctypes.data + a.nbytes) // maps.PAGE * maps.PAGE - a.ctypes.data
+            assert hi <= lo or not a.view(np.uint8)[lo:hi].any()  # its whole pages handed back (they read zeros)
+        width, off = new_width, new_off
+        regrids += 1
+        kept += np.count_nonzero(carried[4])
+    assert regrids >= (1 if line else 2) and kept > 1000

@@ -185,6 +185,14 @@ def _centre_lower(field, dim, fw, i, j, k):
 
 
 @borrow
+def level_lower(level, dim, fw, bi, bj, bk):
+    """Record held cell (bi, bj, bk) of the level below in ``level``, a level of the centre
+    pyramid ``fw`` cells a side: its cells within ``FCAP - 1`` take the distance from their
+    centres to it (``_level_rows``)."""
+    _lower_rows(level, dim, fw, LEVEL_ROWS_2D if dim == 2 else LEVEL_ROWS_3D, FCAP[dim - 2], _STEP[dim], bi, bj, bk)
+
+
+@borrow
 def pyramid_lower(field, dim, W, i, j, k, levels):
     """Record a newly held coarse cell, that of unit cell (i, j, k), in the
     centre pyramid's levels 1 to ``levels - 1``: each level's cells within
@@ -201,8 +209,7 @@ def pyramid_lower(field, dim, W, i, j, k, levels):
             bi, bj, bk = i >> (shift - step), j >> (shift - step), (k >> (shift - step) if dim == 3 else 0)
             here = base + maps.field_cell(dim, fw, bi >> step, bj >> step, bk >> step)
             held = np.int64(field[here]) > LEVEL_HELD[dim]
-            _lower_rows(field[base:base + size], dim, fw, LEVEL_ROWS_2D if dim == 2 else LEVEL_ROWS_3D,
-                        FCAP[dim - 2], step, bi, bj, bk)
+            level_lower(field[base:base + size], dim, fw, bi, bj, bk)
             if held:
                 return level
         base += size

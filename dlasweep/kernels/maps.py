@@ -121,7 +121,7 @@ def zeroed(n, dtype):
 
 @borrow
 def release(a, lo, hi):
-    """Hand the whole pages of the bytes ``lo`` to ``hi`` of the byte array ``a`` back to
+    """Hand the whole pages of the bytes ``lo`` to ``hi`` of the array ``a`` back to
     the OS (they read as zeros after); returns where the released pages end, ``lo``
     when none was whole, so that a caller releasing stretch after stretch passes it on."""
     rlo, rhi = _release_pages(np.uintp(a.ctypes.data) + np.uintp(lo), np.uintp(hi - lo))
@@ -179,6 +179,41 @@ def index(dim, base, nb, i, j, k):
     if dim == 2:
         return block_word(2, base, nb, i >> 3, j >> 3, 0), (i & 7) | ((j & 7) << 3)
     return block_word(3, base, nb, i >> 2, j >> 2, k >> 2), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
+
+
+@borrow
+def carry(old, old_side, new, new_side, bits, shift, dim):
+    """Copy grid ``old``, ``old_side`` cells a side in tiles of ``2**bits`` (``tiled``), into
+    ``new``, ``new_side`` a side, each cell ``shift`` cells further along every axis.
+
+    Only nonzero cells are written (unwritten pages stay free), a tile (a page or
+    less) at a time, and each row of old tiles goes back to the OS once copied, so
+    that the two grids take little more memory than the larger one.
+    """
+    tiles = (old_side + (1 << bits) - 1) >> bits
+    per_tile = 1 << (dim * bits)
+    size = old.itemsize
+    base = 0
+    done = 0
+    for tk in range(tiles if dim == 3 else 1):
+        for tj in range(tiles):
+            for ti in range(tiles):
+                for inner in range(per_tile):
+                    v = old[base + inner]
+                    if v != 0:
+                        a, b, c = untiled(dim, bits, ti, tj, tk, inner)
+                        new[tiled(dim, bits, new_side, a + shift, b + shift, c + shift if dim == 3 else 0)] = v
+                base += per_tile
+            done = release(old, done, base * size)
+    release(old, done, len(old) * size)
+
+
+@inline
+def untiled(dim, bits, ti, tj, tk, inner):
+    """The cell at place ``inner`` of tile (ti, tj, tk) of tiles ``2**bits`` cells a side (``tiled``'s inverse)."""
+    m = (1 << bits) - 1
+    return (ti << bits) | (inner & m), (tj << bits) | ((inner >> bits) & m), \
+        ((tk << bits) | (inner >> (2 * bits))) if dim == 3 else 0
 
 
 @jit

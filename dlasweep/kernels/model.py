@@ -24,10 +24,12 @@ LINE = SEED_SHAPES.index("line")
 
 GRID_GROWTH = {"lattice": 2.0, "offlattice": 2.0}
 """How much larger each kernel builds its grids when the cluster outgrows them: the lattice's side, the
-off-lattice grids' half-width over the cluster. Pages cost memory only once written (``maps.zeroed``), so
-a larger grid costs little; a rebuild marks every particle again (off-lattice, since 2026-11-27, all but in
-the centre field, which it copies). Off-lattice 1.3, 1.6 and 2.0 grew 2D 1e6 in the same time until each particle lowered the centre field's (2 cap - 1)**dim cells, at every rebuild
-too; since then 2.0 against 1.3: 2D 1e6 5.97 s against 6.45, 3D 1e5 2.72 against 2.76, for 0.3 bytes a
+off-lattice grids' half-width over the cluster. Pages cost memory only once written (``maps.zeroed``), so a
+larger grid costs little; a rebuild marks every particle again (off-lattice, since 2026-11-27, all but in the
+centre field, which it copies; the lattice, since 2026-11-29, only near the old grid's edge: it carries its
+words, field and the pyramid's first level over, ``lattice.words.regrow``). Off-lattice 1.3, 1.6 and 2.0 grew
+2D 1e6 in the same time until each particle lowered the centre field's (2 cap - 1)**dim cells, at every
+rebuild too; since then 2.0 against 1.3: 2D 1e6 5.97 s against 6.45, 3D 1e5 2.72 against 2.76, for 0.3 bytes a
 particle more at 2D 3e6. The lattice's 1.25 became 2.0 when its rebuilds marked the centre pyramid cell by
 cell (no fill): 2D 1e6 3.20 s against 3.58 (the kernel before the pyramid: 3.32), 2D 1e7 42.15 s and 22.1
 bytes a particle against 44.59 and 22.7 before. The walks read the grids, so either value is part of its

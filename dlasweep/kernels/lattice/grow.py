@@ -22,10 +22,10 @@ exactly (Poisson kernel) instead of wandering off.
 Where a large cluster's time goes (seed 1, clocks about the parts of ``_grow``, the 2D and 3D
 growths side by side), 1e5 to 1e7: a walk step 65.0 to 83.3 ns in 2D and 91.4 to 143.2 in 3D; a
 particle's attachment 0.57 to 0.74 us (3D 1.30 to 1.61), its share of grid rebuilds 0.26 to 0.38
-us (3D 0.47 to 0.48). The steps a particle add Brownian jumps alone: 3.7 to 13.7 in 2D (single
-steps 7.0 and 7.0, square jumps 21.2 and 21.9), 4.8, 16.3 and 32.3 in 3D at 1e5, 1e6 and 1e7
-(single steps 25.8, 25.8, 25.8; square jumps 49.5, 51.7, 52.1): a walker crosses more of the open
-3D cluster before it sticks.
+us (3D 0.47 to 0.48; before ``words.regrow`` carried the grid over). The steps a particle add
+Brownian jumps alone: 3.7 to 13.7 in 2D (single steps 7.0 and 7.0, square jumps 21.2 and 21.9),
+4.8, 16.3 and 32.3 in 3D at 1e5, 1e6 and 1e7 (single steps 25.8, 25.8, 25.8; square jumps 49.5,
+51.7, 52.1): a walker crosses more of the open 3D cluster before it sticks.
 
 The walk's passes clocked by kind (processor cycles about each pass, about 30 of them the clock's;
 seed 1, the same clusters): in 2D a particle's walk grows from 7.2k cycles at 1e5 to 12.5k at 1e7.
@@ -68,6 +68,7 @@ from .words import (
     mark_images,
     occupied,
     rebuild,
+    regrow,
     site_word,
     word_at,
 )
@@ -208,8 +209,8 @@ def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
 
     ``grid`` is (words, start, blocks, cells, field, width, off). Returns the
     new count, r_max, h_max, the grid's width and offset, and whether it was
-    outgrown: the caller then drops it and builds a larger one (``words.rebuild``), which marks
-    every particle, this one included.
+    outgrown: the caller then builds a larger one from it (``words.regrow``), which marks
+    this one.
     """
     words, start, blocks, cells, field, width, off = grid
     line = period > 0
@@ -231,13 +232,6 @@ def _attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
         return count, r_max, h_max, width, off, True
     mark_images(words, dim, start, blocks, cells, field, width, off, q, period, FIELD_CAP[dim], field[:0])
     return count, r_max, h_max, width, off, False
-
-
-@jit
-def _no_grid():
-    """Empty arrays of a grid's types: a caller takes them to drop its old grid."""
-    none = np.zeros(0, np.int64)
-    return np.zeros(0, np.uint64), none, none, none, np.zeros(0, np.uint8)
 
 
 @borrow
@@ -420,8 +414,9 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
             # Built here, not where the old grid was outgrown: numba frees an array
             # held across a loop's passes only when the pass ends, and the two
             # grids would be held at once (the memory growth added at 1e6 in 3D:
-            # 122 MB then, 88 MB now; at 1e7 in 2D, 389 MB then, 340 MB now).
-            words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+            # 122 MB then, 88 MB now; at 1e7 in 2D, 389 MB then, 340 MB now);
+            # ``regrow`` hands the old grid's pages back as it carries them over.
+            words, start, blocks, cells, field = regrow(points, count, dim, width, off, period, grid)
             grid = (words, start, blocks, cells, field, width, off)
             nb0, base1, nb1 = blocks[0], start[1], blocks[1]
             levels = maps.pyramid_starts(dim, width, FIELD_CAP[dim])
@@ -616,9 +611,6 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
         if stuck:
             count, r_max, h_max, width, off, regrid = _attach(points, steps, count, pending, q, dim, period,
                                                               r_max, h_max, grid)
-            if regrid:  # dropped now, the larger grid built at the top of the next pass
-                words, start, blocks, cells, field = _no_grid()
-                grid = (words, start, blocks, cells, field, width, off)
             pending = 0
             passed = checkpoint(marks, times, passed, count, t0)
             need_launch = True
@@ -666,7 +658,7 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
     regrid = False
     while count < n:
         if regrid:  # as in ``_grow``
-            words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+            words, start, blocks, cells, field = regrow(points, count, dim, width, off, period, grid)
             grid = (words, start, blocks, cells, field, width, off)
             regrid = False
         if max_steps > 0 and total >= max_steps:
@@ -697,9 +689,6 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
         if stuck:
             count, r_max, h_max, width, off, regrid = _attach(points, steps, count, pending, q, dim, period,
                                                               r_max, h_max, grid)
-            if regrid:  # as in ``_grow``
-                words, start, blocks, cells, field = _no_grid()
-                grid = (words, start, blocks, cells, field, width, off)
             pending = 0
             passed = checkpoint(marks, times, passed, count, t0)
             alive[w] = False

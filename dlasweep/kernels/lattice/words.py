@@ -11,9 +11,9 @@ site q of the lattice is cell q + ``off`` of the grid, whose side is
 
 import numpy as np
 
-from ..._jit import jit
+from ..._jit import borrow, jit
 from .. import maps
-from ..centres import pyramid_lower
+from ..centres import FCAP, LEVEL_HELD, level_lower, pyramid_lower
 
 FIELD_CAP = (0, 0, 16, 6)
 """By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
@@ -64,6 +64,101 @@ def rebuild(points, count, dim, width, off, period):
         mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1, held)
     maps.field_fill(field, dim, fw, FIELD_CAP[dim], held)
     return words, start, blocks, cells, field
+
+
+@jit
+def regrow(points, count, dim, width, off, period, old):
+    """``rebuild``'s grid, bit for bit, for a cluster that outgrew the grid ``old``
+    (words, start, blocks, cells, field, width, off), every particle but the last
+    marked in it: the words, the field and the centre pyramid's first level are
+    carried over (``maps.carry``) instead of marked again, and the old grid's
+    pages go back to the OS.
+
+    The grids' cells line up (the offsets differ by half the old side, 32 sites
+    or more: whole words of both segments, whole cells of both levels). Every
+    value is a union or a maximum over particles or held cells, so only what the
+    old grid could not hold is added: the field and the first level beyond its
+    edge, lowered again about the particles whose reach crossed it, the levels
+    above the first from the held cells of the level below, and the last
+    particle. Substrates, whose grids grow upwards only, are built anew.
+
+    Against ``rebuild`` at the regrids of a 2D cluster of 1e6 (seed 1): 0.086 s
+    in all against 0.203 (at 506097 particles 30 ms against 142); 3D 3e5 0.143
+    against 0.186 (its levels are twice, not four times, as wide as the one below,
+    and more of them are built anew). The growth alone on one core, the same
+    clusters: 2D 1e7 60.2 and 62.7 s against 65.8 and 66.0, 1e6 4.13, 4.37 and
+    3.92 against 4.71, 4.55 and 4.10; 3D 1e6 16.8 and 15.5 against 17.6 and 17.9.
+    """
+    o_words, o_start, o_blocks, _, o_field, o_width, o_off = old
+    step = maps.PYRAMID_STEP[dim]
+    shift = off - o_off
+    block = 8 if dim == 2 else 4
+    cap, fcap = FIELD_CAP[dim], FCAP[dim - 2]
+    o_levels = maps.pyramid_starts(dim, o_width, cap)
+    levels = maps.pyramid_starts(dim, width, cap)
+    sides = np.zeros(len(levels) - 1, np.int64)  # cells a side of each level
+    for level in range(len(levels) - 1):
+        sides[level] = (width + (1 << (maps.FIELD_SHIFT + step * level)) - 1) >> (maps.FIELD_SHIFT + step * level)
+    carried = period == 0 and shift > 0 and shift % max(2 * block, 1 << (maps.FIELD_SHIFT + step)) == 0 \
+        and len(o_levels) > 2 and len(levels) > 2
+    if carried:
+        words, start, blocks, cells = maps.allocate(dim, width, 2)
+        field = maps.pyramid_allocate(dim, width, cap)
+        for s in range(2):
+            maps.carry(o_words[o_start[s]:o_start[s + 1]], o_blocks[s], words[start[s]:start[s + 1]], blocks[s],
+                       maps.TILE_BITS[dim], (shift >> s) // block, dim)
+        for level in range(2):
+            s = maps.FIELD_SHIFT + step * level
+            maps.carry(o_field[o_levels[level]:o_levels[level + 1]], (o_width + (1 << s) - 1) >> s,
+                       field[levels[level]:levels[level + 1]], sides[level], maps.FIELD_TILE[dim], shift >> s, dim)
+    # every whole page, those the segments and levels share too: not held beside the new grid
+    maps.release(o_words, 0, len(o_words) * o_words.itemsize)
+    maps.release(o_field, 0, len(o_field))
+    if not carried:
+        return rebuild(points, count, dim, width, off, period)
+    level1 = field[levels[1]:levels[2]]
+    o_fw = (o_width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
+    o_fw1 = (o_width + (1 << (maps.FIELD_SHIFT + step)) - 1) >> (maps.FIELD_SHIFT + step)
+    g = np.zeros(3, np.int64)  # a particle's site in the old grid
+    for p in range(count - 1):
+        for a in range(dim):
+            g[a] = points[p, a] + o_off
+        edge0 = edge1 = False
+        for a in range(dim):
+            c0, c1 = g[a] >> maps.FIELD_SHIFT, g[a] >> (maps.FIELD_SHIFT + step)
+            edge0 = edge0 or c0 < cap - 1 or c0 >= o_fw - (cap - 1)
+            edge1 = edge1 or c1 < fcap - 1 or c1 >= o_fw1 - (fcap - 1)
+        ci, cj = (g[0] + shift) >> maps.FIELD_SHIFT, (g[1] + shift) >> maps.FIELD_SHIFT
+        ck = (g[2] + shift) >> maps.FIELD_SHIFT if dim == 3 else 0
+        if edge0:
+            maps.field_lower(field, dim, sides[0], cap, cap, ci, cj, ck)
+        if edge1:
+            level_lower(level1, dim, sides[1], ci, cj, ck)
+    for level in range(2, len(levels) - 1):
+        _lower_from_held(field[levels[level - 1]:levels[level]], sides[level - 1],
+                         field[levels[level]:levels[level + 1]], sides[level], dim)
+    q = np.zeros(3, np.int64)
+    for a in range(dim):
+        q[a] = points[count - 1, a]
+    mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap, field[:0])
+    return words, start, blocks, cells, field
+
+
+@borrow
+def _lower_from_held(below, side_below, level, side, dim):
+    """Lower ``level``, ``side`` cells a side, about every held cell of the level below it (``below``)."""
+    bits = maps.FIELD_TILE[dim]
+    tiles = (side_below + (1 << bits) - 1) >> bits
+    per_tile = 1 << (dim * bits)
+    base = 0
+    for tk in range(tiles if dim == 3 else 1):
+        for tj in range(tiles):
+            for ti in range(tiles):
+                for inner in range(per_tile):
+                    if np.int64(below[base + inner]) > LEVEL_HELD[dim]:
+                        a, b, c = maps.untiled(dim, bits, ti, tj, tk, inner)
+                        level_lower(level, dim, side, a, b, c)
+                base += per_tile
 
 
 @jit

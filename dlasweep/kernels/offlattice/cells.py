@@ -405,7 +405,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     W = gi[MAP_WIDTH]
     fw = (W + (1 << FS) - 1) >> FS
     old_fw = (old_gi[MAP_WIDTH] + (1 << FS) - 1) >> FS
-    _carry_field(old_field, old_fw, field, fw, (gi[MAP_OFFSET] - old_gi[MAP_OFFSET]) >> FS, dim)
+    maps.carry(old_field, old_fw, field, fw, maps.FIELD_TILE[dim], (gi[MAP_OFFSET] - old_gi[MAP_OFFSET]) >> FS, dim)
     levels = maps.pyramid_levels(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS])
     reach = CCAP[dim - 2] - 1
     for i in range(count):
@@ -438,34 +438,6 @@ def _first_in_coarse_cell(i0, i1, i2, j, pts, nxt, dim, gi):
             return False
         j = nxt[j]
     return True
-
-
-@borrow
-def _carry_field(old, old_fw, field, fw, shift, dim):
-    """Copy the centre field (level 0) of ``old``, ``old_fw`` cells a side, into
-    ``field``, ``fw`` cells a side, its cells ``shift`` cells further along each
-    axis. Only held values are written (unwritten pages stay free), a tile (a
-    page) at a time, and each row of old tiles goes back to the OS once copied."""
-    bits = maps.FIELD_TILE[dim]
-    side = 1 << bits
-    m = side - 1
-    tiles = (old_fw + m) >> bits
-    per_tile = 1 << (dim * bits)
-    base = 0
-    done = 0
-    for tk in range(tiles if dim == 3 else 1):
-        for tj in range(tiles):
-            for ti in range(tiles):
-                for inner in range(per_tile):
-                    v = old[base + inner]
-                    if v != 0:
-                        a = (ti << bits) | (inner & m)
-                        b = (tj << bits) | ((inner >> bits) & m)
-                        c = ((tk << bits) | (inner >> (2 * bits))) + shift if dim == 3 else 0
-                        field[maps.field_cell(dim, fw, a + shift, b + shift, c)] = v
-                base += per_tile
-            done = maps.release(old, done, base)
-    maps.release(old, done, len(old))
 
 
 @jit
