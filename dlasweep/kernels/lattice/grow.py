@@ -411,11 +411,10 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
     regrid = False
     while count < n:
         if regrid:
-            # Built here, not where the old grid was outgrown: numba frees an array
-            # held across a loop's passes only when the pass ends, and the two
-            # grids would be held at once (the memory growth added at 1e6 in 3D:
-            # 122 MB then, 88 MB now; at 1e7 in 2D, 389 MB then, 340 MB now);
-            # ``regrow`` hands the old grid's pages back as it carries them over.
+            # Built here, at the top of a pass, from the old grid, whose pages ``regrow``
+            # hands back as it carries them over: the two grids are never held whole
+            # at once (when they were, the memory added at 1e6 in 3D was 122 MB, not
+            # 88; at 1e7 in 2D 389 MB, not 340).
             words, start, blocks, cells, field = regrow(points, count, dim, width, off, period, grid)
             grid = (words, start, blocks, cells, field, width, off)
             nb0, base1, nb1 = blocks[0], start[1], blocks[1]

@@ -535,7 +535,7 @@ def _grow(dimension, n, model, marks, rng, times):
     while count < n:
         if regrid >= 0:
             # Built here, not where the old grid was outgrown: numba frees an array
-            # held across a loop's passes only when the pass ends (as in the lattice kernel).
+            # held across a loop's passes only when the pass ends.
             gi, gf, words, start, blocks, cells, dirr, heads, field = regrow_grid(
                 dim, line, size, geo[2] if line else geo[1], pts, count, nxt, regrid, old_gi, old_field)
             old_gi, old_field = gi, field
