@@ -22,6 +22,7 @@ from dlasweep.kernels.lattice.exits import (
 from dlasweep.kernels.walk import seed_stream
 from dlasweep.kernels.lattice.grow import _distance_bound, _release
 from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild, regrow
+from dlasweep.kernels.model import GRID_GROWTH
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -463,7 +464,7 @@ def test_a_regrown_grid_is_the_grid_built_anew_bit_for_bit(params):
             break
         m = int(np.argmax(past)) + 1
         old = rebuild(points, m - 1, dim, width, off, period)
-        new_width = (2 * width + 15) // 16 * 16
+        new_width = (int(width * GRID_GROWTH["lattice"]) + 15) // 16 * 16  # as _attach
         new_off = off if line else new_width // 2
         fresh = rebuild(points, m, dim, new_width, new_off, period)
         carried = regrow(points, m, dim, new_width, new_off, period, (*old, width, off))
