@@ -6,7 +6,9 @@ word, then dilated level 1, which tells a walker within two sites) with a
 coarse Chebyshev distance field beside it (``maps.field_lower``), and above
 the field the centre pyramid (``centres.pyramid_lower``) in the same array; a
 site q of the lattice is cell q + ``off`` of the grid, whose side is
-``width``. A substrate's periodic images are marked too.
+``width``. A substrate's periodic images are marked too. A grid is built
+for a cluster's particles (``rebuild``), or, when the cluster outgrows it,
+carried over into a larger one (``regrow``).
 """
 
 import numpy as np
