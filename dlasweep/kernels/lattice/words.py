@@ -98,9 +98,13 @@ def regrow(points, count, dim, width, off, period, old):
     cap, fcap = FIELD_CAP[dim], FCAP[dim - 2]
     o_levels = maps.pyramid_starts(dim, o_width, cap)
     levels = maps.pyramid_starts(dim, width, cap)
-    sides = np.zeros(len(levels) - 1, np.int64)  # cells a side of each level
+    sides = np.zeros(len(levels) - 1, np.int64)  # cells a side of each level, the new grid's and the old's
+    o_sides = np.zeros(len(o_levels) - 1, np.int64)
     for level in range(len(levels) - 1):
-        sides[level] = (width + (1 << (maps.FIELD_SHIFT + step * level)) - 1) >> (maps.FIELD_SHIFT + step * level)
+        s = maps.FIELD_SHIFT + step * level
+        sides[level] = (width + (1 << s) - 1) >> s
+        if level < len(o_sides):
+            o_sides[level] = (o_width + (1 << s) - 1) >> s
     carried = period == 0 and shift > 0 and shift % max(2 * block, 1 << (maps.FIELD_SHIFT + step)) == 0 \
         and len(o_levels) > 2 and len(levels) > 2
     if carried:
@@ -110,17 +114,15 @@ def regrow(points, count, dim, width, off, period, old):
             maps.carry(o_words[o_start[s]:o_start[s + 1]], o_blocks[s], words[start[s]:start[s + 1]], blocks[s],
                        maps.TILE_BITS[dim], (shift >> s) // block, dim)
         for level in range(2):
-            s = maps.FIELD_SHIFT + step * level
-            maps.carry(o_field[o_levels[level]:o_levels[level + 1]], (o_width + (1 << s) - 1) >> s,
-                       field[levels[level]:levels[level + 1]], sides[level], maps.FIELD_TILE[dim], shift >> s, dim)
+            maps.carry(o_field[o_levels[level]:o_levels[level + 1]], o_sides[level],
+                       field[levels[level]:levels[level + 1]], sides[level], maps.FIELD_TILE[dim],
+                       shift >> (maps.FIELD_SHIFT + step * level), dim)
     # every whole page, those the segments and levels share too: not held beside the new grid
     maps.release(o_words, 0, len(o_words) * o_words.itemsize)
     maps.release(o_field, 0, len(o_field))
     if not carried:
         return rebuild(points, count, dim, width, off, period)
     level1 = field[levels[1]:levels[2]]
-    o_fw = (o_width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
-    o_fw1 = (o_width + (1 << (maps.FIELD_SHIFT + step)) - 1) >> (maps.FIELD_SHIFT + step)
     g = np.zeros(3, np.int64)  # a particle's site in the old grid
     for p in range(count - 1):
         for a in range(dim):
@@ -128,8 +130,8 @@ def regrow(points, count, dim, width, off, period, old):
         edge0 = edge1 = False
         for a in range(dim):
             c0, c1 = g[a] >> maps.FIELD_SHIFT, g[a] >> (maps.FIELD_SHIFT + step)
-            edge0 = edge0 or c0 < cap - 1 or c0 >= o_fw - (cap - 1)
-            edge1 = edge1 or c1 < fcap - 1 or c1 >= o_fw1 - (fcap - 1)
+            edge0 = edge0 or c0 < cap - 1 or c0 >= o_sides[0] - (cap - 1)
+            edge1 = edge1 or c1 < fcap - 1 or c1 >= o_sides[1] - (fcap - 1)
         ci, cj = (g[0] + shift) >> maps.FIELD_SHIFT, (g[1] + shift) >> maps.FIELD_SHIFT
         ck = (g[2] + shift) >> maps.FIELD_SHIFT if dim == 3 else 0
         if edge0:
