@@ -557,22 +557,26 @@ def test_a_3d_cluster_grown_in_sorted_rows_keeps_its_parents_and_contacts():
         assert np.argmin(d) == c.parents[i] and abs(d.min() - 1.0) < 1e-9, i
 
 
-@pytest.mark.parametrize("case", ["2d", "3d", "block", "block-3d", "box"])
+@pytest.mark.parametrize("case", ["2d", "3d", "block", "block-3d", "box", "2d-large"])
 def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case):
-    """``cells.regrow_grid`` (the centre field copied from the outgrown grid, the
-    pyramid and maps marked once per coarse cell) gives every array of
+    """``cells.regrow_grid`` (the centre field and the pyramid's first level copied
+    from the outgrown grid, the levels above built from the first) gives every array of
     ``build_grid``'s grid, built from nothing for the same particles: a grown
     cluster's first m particles in a grid, the (m+1)-th outside it, as when
-    growth outgrows a grid. The old field's whole pages go back to the OS: they read zeros."""
+    growth outgrows a grid. The old field's whole pages go back to the OS: they read zeros.
+    In the large 2D case most of the first level lies beyond the reach of the
+    particles near the old grid's edge: it is copied, not lowered again."""
     from dlasweep.kernels.offlattice import cells
 
-    params = VARIANTS[case]
+    params = VARIANTS[case.removesuffix("-large")]
     dim = params.get("dim", 2)
     size = params.get("size", 0)
-    pts = dla.grow(6000 if dim == 2 else 4000, seed=3, **OFF, **params).points
+    n = 40000 if case.endswith("-large") else 6000 if dim == 2 else 4000
+    pts = dla.grow(n, seed=3, **OFF, **params).points
     extent = np.abs(pts).max(1)
     kept = rebuilds = 0
-    for first in (20, 40, 200, 900):  # small grids, most particles near an edge, and larger ones
+    # small grids, most particles near an edge, and larger ones
+    for first in (20, 40, 200, 900) if n < 40000 else (9000,):
         if first >= len(pts):  # a box stops its cluster early
             break
         nxt = np.full(len(pts), -1, np.int32)
@@ -594,4 +598,33 @@ def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case)
         lo, hi = -address % maps.PAGE, (address + old[8].nbytes) // maps.PAGE * maps.PAGE - address
         assert hi <= lo or not old[8][lo:hi].any()  # its whole pages handed back (they read zeros)
         kept += np.count_nonzero(carried[8])
-    assert rebuilds >= 2 and kept > 500
+    assert rebuilds >= (1 if n == 40000 else 2) and kept > 500
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_rebuild_lowers_again_exactly_the_cells_the_old_grid_lacked(dim):
+    """``cells.regrow_grid`` on arms that end at the last cells whose reach crosses the
+    old grid's edge, of the centre field (along -y) and of the pyramid's first level
+    (along -x): their lowering beyond that edge is kept, so the grid equals
+    ``build_grid``'s (a reach one cell shorter loses it: the field differs)."""
+    from dlasweep.kernels.centres import CCAP, FCAP, FS
+    from dlasweep.kernels.offlattice import cells
+
+    step = maps.PYRAMID_STEP[dim]
+    half = cells._layout(dim, False, 0, 300.0)[0][cells.COVERED]
+    x_end = half - ((FCAP[dim - 2] - 2) << (FS + step)) - 3  # first level: index FCAP - 2 from the edge
+    y_end = half - ((CCAP[dim - 2] - 2) << FS) - 1  # field: index CCAP - 2
+    arms = [np.c_[np.arange(0, 301.0), np.zeros(301)], np.c_[-np.arange(1, x_end + 1.0), np.zeros(x_end)],
+            np.c_[np.zeros(y_end), -np.arange(1, y_end + 1.0)], [[0.0, half + 10.0]]]  # the last beyond the old grid
+    pts = np.concatenate(arms)
+    pts = np.ascontiguousarray(np.c_[pts, np.zeros(len(pts))] if dim == 3 else pts)
+    assert ((half - x_end) >> (FS + step), (half - y_end) >> FS) == (FCAP[dim - 2] - 2, CCAP[dim - 2] - 2)
+    n = len(pts)
+    nxt = np.full(n, -1, np.int32)
+    old = cells.build_grid(dim, False, 0, 300.0, pts, n - 1, nxt.copy(), 0)
+    assert old[0][cells.COVERED] == half
+    need, tiles = np.abs(pts).max(), old[0][cells.TILES_USED]
+    fresh = cells.build_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles)
+    carried = cells.regrow_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles, old[0], old[8])
+    for name, a, b in zip(("gi", "gf", "words", "start", "blocks", "cells", "dirr", "heads", "field"), fresh, carried):
+        np.testing.assert_array_equal(a, b, err_msg=name)

@@ -193,6 +193,24 @@ def level_lower(level, dim, fw, bi, bj, bk):
 
 
 @borrow
+def lower_from_held(below, side_below, level, side, dim):
+    """Lower ``level``, ``side`` cells a side, about every held cell of the level below it (``below``):
+    the level built from the one below in one pass, as ``pyramid_lower`` builds it a held cell at a time."""
+    bits = maps.FIELD_TILE[dim]
+    tiles = (side_below + (1 << bits) - 1) >> bits
+    per_tile = 1 << (dim * bits)
+    base = 0
+    for tk in range(tiles if dim == 3 else 1):
+        for tj in range(tiles):
+            for ti in range(tiles):
+                for inner in range(per_tile):
+                    if np.int64(below[base + inner]) > LEVEL_HELD[dim]:
+                        a, b, c = maps.untiled(dim, bits, ti, tj, tk, inner)
+                        level_lower(level, dim, side, a, b, c)
+                base += per_tile
+
+
+@borrow
 def pyramid_lower(field, dim, W, i, j, k, levels):
     """Record a newly held coarse cell, that of unit cell (i, j, k), in the
     centre pyramid's levels 1 to ``levels - 1``: each level's cells within

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..._jit import borrow, jit
 from .. import maps
-from ..centres import FCAP, LEVEL_HELD, level_lower, pyramid_lower
+from ..centres import FCAP, level_lower, lower_from_held, pyramid_lower
 
 FIELD_CAP = (0, 0, 16, 6)
 """By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
@@ -139,30 +139,13 @@ def regrow(points, count, dim, width, off, period, old):
         if edge1:
             level_lower(level1, dim, sides[1], ci, cj, ck)
     for level in range(2, len(levels) - 1):
-        _lower_from_held(field[levels[level - 1]:levels[level]], sides[level - 1],
+        lower_from_held(field[levels[level - 1]:levels[level]], sides[level - 1],
                          field[levels[level]:levels[level + 1]], sides[level], dim)
     q = np.zeros(3, np.int64)
     for a in range(dim):
         q[a] = points[count - 1, a]
     mark_images(words, dim, start, blocks, cells, field, width, off, q, period, cap, field[:0])
     return words, start, blocks, cells, field
-
-
-@borrow
-def _lower_from_held(below, side_below, level, side, dim):
-    """Lower ``level``, ``side`` cells a side, about every held cell of the level below it (``below``)."""
-    bits = maps.FIELD_TILE[dim]
-    tiles = (side_below + (1 << bits) - 1) >> bits
-    per_tile = 1 << (dim * bits)
-    base = 0
-    for tk in range(tiles if dim == 3 else 1):
-        for tj in range(tiles):
-            for ti in range(tiles):
-                for inner in range(per_tile):
-                    if np.int64(below[base + inner]) > LEVEL_HELD[dim]:
-                        a, b, c = maps.untiled(dim, bits, ti, tj, tk, inner)
-                        level_lower(level, dim, side, a, b, c)
-                base += per_tile
 
 
 @jit

@@ -73,9 +73,10 @@ extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk
 loop's next pass: numba frees an array held across a loop's passes only
 when the pass ends, so building them in the same pass held both. The
-centre field alone is kept until the new grid has copied it
-(``cells.regrow_grid``: no particle lowers its cells again but those near
-the old grid's edge), its pages handed back to the OS as they are copied.
+centre field alone (with the pyramid above it) is kept until the new grid
+has copied it and the pyramid's first level (``cells.regrow_grid``: no
+particle lowers their cells again but those near the old grid's edge), its
+pages then handed back to the OS.
 (With walkers > 1 both are still held during a rebuild: the box bounds them.)
 
 Speed note: numba counts the references of the arrays a function hands on,
