@@ -477,3 +477,28 @@ def test_a_regrown_grid_is_the_grid_built_anew_bit_for_bit(params):
         regrids += 1
         kept += np.count_nonzero(carried[4])
     assert regrids >= (1 if line else 2) and kept > 1000
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_regrown_grid_lowers_again_exactly_the_cells_the_old_grid_lacked(dim):
+    """``words.regrow`` on arms that end at the last cells whose reach crosses the
+    old grid's edge, of the field (along -y) and of the pyramid's first level (along
+    -x): their lowering beyond that edge is kept, so the grid equals ``rebuild``'s
+    (a reach one cell shorter loses it: the field differs)."""
+    width = 1024 if dim == 2 else 256
+    off = width // 2
+    s1 = maps.FIELD_SHIFT + maps.PYRAMID_STEP[dim]
+    x_end = off - ((centres.FCAP[dim - 2] - 2) << s1) - 3  # first level: index FCAP - 2 from the old edge
+    y_end = off - ((FIELD_CAP[dim] - 2) << maps.FIELD_SHIFT) - 1  # field: index FIELD_CAP - 2
+    points = np.zeros((x_end + y_end + 2, 3), np.int64)
+    points[1:x_end + 1, 0] = -np.arange(1, x_end + 1)
+    points[x_end + 1:-1, 1] = -np.arange(1, y_end + 1)
+    points[-1, 1] = off - 2  # the last: past the edge by ``_attach``'s rule
+    assert ((off - x_end) >> s1, (off - y_end) >> maps.FIELD_SHIFT) == (centres.FCAP[dim - 2] - 2, FIELD_CAP[dim] - 2)
+    m = len(points)
+    old = rebuild(points, m - 1, dim, width, off, 0)
+    new_width = (int(width * GRID_GROWTH["lattice"]) + 15) // 16 * 16  # as _attach
+    fresh = rebuild(points, m, dim, new_width, new_width // 2, 0)
+    carried = regrow(points, m, dim, new_width, new_width // 2, 0, (*old, width, off))
+    for name, a, b in zip(("words", "start", "blocks", "cells", "field"), fresh, carried):
+        np.testing.assert_array_equal(a, b, err_msg=name)
