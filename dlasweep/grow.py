@@ -209,8 +209,13 @@ def _watched(kernel, n, p, marks, rng, progress=None):
     Growth does not depend on the marks (they only read a clock), so more
     marks are passed, every n / ``WATCH_MARKS``, and the times it fills are
     read as it goes. Watching costs nothing measurable: a 10^6 lattice
-    cluster grew in the same time watched as called directly.
+    cluster grew in the same time watched as called directly. Without
+    ``progress`` only ``marks`` are passed: setting up and reading the watch
+    marks took 0.3 to 0.5 ms a call, a tenth of a 10^3 lattice cluster's ``grow``.
     """
+    if progress is None:
+        (result,) = _waited(lambda: kernel(n, p, marks, [rng]))
+        return result
     watch = np.union1d(marks, np.linspace(0, n, WATCH_MARKS + 1)[1:].astype(np.int64)).astype(np.int64)
     times = np.full((1, len(watch)), np.nan)
     start = time.perf_counter()

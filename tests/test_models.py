@@ -182,6 +182,8 @@ def test_a_watched_growth_reports_its_particles_and_grows_the_same_cluster(model
     np.testing.assert_array_equal(watched.steps, plain.steps)
     assert watched.status == plain.status and list(watched.checkpoints) == marks
     assert np.all(np.diff(watched.times) >= 0) and not np.isnan(watched.times).any()
+    # unwatched, the kernel is given the checkpoints alone: a time for each
+    assert plain.times.shape == (len(marks),) and np.all(np.diff(plain.times) >= 0) and not np.isnan(plain.times).any()
     particles, seconds = np.array(seen).T
     assert np.all(np.diff(particles) >= 0) and np.all(np.diff(seconds) >= 0) and particles[-1] == 30_000
     # reported as it grows, at the watch marks (every n / WATCH_MARKS) or the checkpoints
@@ -198,6 +200,8 @@ def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
     monkeypatch.setitem(growing.KERNELS, "lattice", broken)
     with pytest.raises(MemoryError, match="simulated"):
         dla.grow(100, 0, progress=lambda k, s: None)
+    with pytest.raises(MemoryError, match="simulated"):
+        dla.grow(100, 0)
 
 
 @pytest.mark.parametrize("many", [False, True])
