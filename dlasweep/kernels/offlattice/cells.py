@@ -35,9 +35,9 @@ from ..centres import (
     _centre_lower,
     centre_bound,
     field_reach,
-    pyramid_ball,
     level_lower,
     lower_from_held,
+    pyramid_ball,
     pyramid_dist,
     pyramid_lower,
 )
