@@ -193,21 +193,27 @@ def level_lower(level, dim, fw, bi, bj, bk):
 
 
 @borrow
-def lower_from_held(below, side_below, level, side, dim):
-    """Lower ``level``, ``side`` cells a side, about every held cell of the level below it (``below``):
-    the level built from the one below in one pass, as ``pyramid_lower`` builds it a held cell at a time."""
+def levels_from_held(field, starts, width, dim):
+    """Build the centre pyramid's levels above the first (``starts``: ``maps.pyramid_starts`` of a
+    grid of side ``width``), each in one pass about every held cell of the level below: what
+    ``pyramid_lower`` builds a held cell at a time, for a grid whose first level is whole."""
     bits = maps.FIELD_TILE[dim]
-    tiles = (side_below + (1 << bits) - 1) >> bits
     per_tile = 1 << (dim * bits)
-    base = 0
-    for tk in range(tiles if dim == 3 else 1):
-        for tj in range(tiles):
-            for ti in range(tiles):
-                for inner in range(per_tile):
-                    if np.int64(below[base + inner]) > LEVEL_HELD[dim]:
-                        a, b, c = maps.untiled(dim, bits, ti, tj, tk, inner)
-                        level_lower(level, dim, side, a, b, c)
-                base += per_tile
+    for upper in range(2, len(starts) - 1):
+        below, level = field[starts[upper - 1]:starts[upper]], field[starts[upper]:starts[upper + 1]]
+        shift = FS + _STEP[dim] * upper
+        side_below = (width + (1 << (shift - _STEP[dim])) - 1) >> (shift - _STEP[dim])
+        side = (width + (1 << shift) - 1) >> shift
+        tiles = (side_below + (1 << bits) - 1) >> bits
+        base = 0
+        for tk in range(tiles if dim == 3 else 1):
+            for tj in range(tiles):
+                for ti in range(tiles):
+                    for inner in range(per_tile):
+                        if np.int64(below[base + inner]) > LEVEL_HELD[dim]:
+                            a, b, c = maps.untiled(dim, bits, ti, tj, tk, inner)
+                            level_lower(level, dim, side, a, b, c)
+                    base += per_tile
 
 
 @borrow

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..._jit import borrow, jit
 from .. import maps
-from ..centres import FCAP, level_lower, lower_from_held, pyramid_lower
+from ..centres import FCAP, level_lower, levels_from_held, pyramid_lower
 
 FIELD_CAP = (0, 0, 16, 6)
 """By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
@@ -138,9 +138,7 @@ def regrow(points, count, dim, width, off, period, old):
             maps.field_lower(field, dim, sides[0], cap, cap, ci, cj, ck)
         if edge1:
             level_lower(level1, dim, sides[1], ci, cj, ck)
-    for level in range(2, len(levels) - 1):
-        lower_from_held(field[levels[level - 1]:levels[level]], sides[level - 1],
-                         field[levels[level]:levels[level + 1]], sides[level], dim)
+    levels_from_held(field, levels, width, dim)
     q = np.zeros(3, np.int64)
     for a in range(dim):
         q[a] = points[count - 1, a]

@@ -36,7 +36,7 @@ from ..centres import (
     centre_bound,
     field_reach,
     level_lower,
-    lower_from_held,
+    levels_from_held,
     pyramid_ball,
     pyramid_dist,
     pyramid_lower,
@@ -391,7 +391,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     multiples of 16 sites), so the old cells are copied (``maps.carry``), and
     only the particles whose reach crossed the old grid's edge lower them again
     (the last, outside it, among them); the levels above the first are built
-    from the held cells of the level below (``centres.lower_from_held``), as in
+    from the held cells of the level below (``centres.levels_from_held``), as in
     the lattice's ``words.regrow``. Every stored value is a maximum or a union
     over particles or held cells, so the order does not matter. Before, each
     coarse cell lowered the pyramid about it, (2 ``FCAP`` - 1)**dim cells of the
@@ -452,10 +452,7 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
             top = len(cells) if level < 0 else min(len(cells), FS + step * level)
         _mark_levels(words, dim, start, blocks, cells, i0, i1, i2, top)
     if pyramid:
-        for level in range(2, len(levels) - 1):
-            s = FS + step * level
-            lower_from_held(field[levels[level - 1]:levels[level]], (W + (1 << (s - step)) - 1) >> (s - step),
-                            field[levels[level]:levels[level + 1]], (W + (1 << s) - 1) >> s, dim)
+        levels_from_held(field, levels, W, dim)
     return gi, gf, words, start, blocks, cells, dirr, heads, field
 
 
