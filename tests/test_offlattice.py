@@ -262,19 +262,19 @@ def test_the_maps_keep_the_levels_their_bound_reads(dim, n):
     random points equals its value over maps of every level, each marked for every particle (level s:
     the 3**dim level-s cells about each particle's). The 2D seed's grid, too small for a pyramid, keeps
     them all, as its bound reads them at the field's cap."""
-    from dlasweep.kernels.offlattice import cells as ol
+    from dlasweep.kernels.offlattice import geometry, grid as ol
 
     rng = np.random.default_rng(dim)
     pts = rng.normal(0, 25, (6, dim))[rng.integers(0, 6, n)] + rng.normal(0, 6, (n, dim)) if n > 1 else np.zeros((1, dim))
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, False, 0, np.abs(pts).max(), pts, n, np.full(n, -1, np.int32), 0)
-    W = gi[ol.MAP_WIDTH]
+    W = gi[geometry.MAP_WIDTH]
     pyramid = len(ol.level_starts(gi, dim)) > 2
     assert pyramid == (n > 1 or dim == 3) and (len(cells) == ol.FS) == pyramid
     every_start, every_blocks, every_cells = maps.layout(dim, W)
     every_start -= every_start[1]
     every = np.zeros(every_start[-1], np.uint64)
-    off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
+    off = gi[geometry.MAP_OFFSET:geometry.MAP_OFFSET + dim]
     for p in np.floor(pts).astype(int) + off:
         ol._mark_levels(every, dim, every_start, every_blocks, every_cells, *np.r_[p, np.zeros(3 - dim, int)],
                         len(every_cells))
@@ -294,7 +294,7 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     pyramid's first two levels the distance from each cell's centre to the
     nearest held cell of the level below;
     random clustered sets, at points near and far (where the pyramid bounds)."""
-    from dlasweep.kernels.offlattice import cells as ol
+    from dlasweep.kernels.offlattice import geometry, grid as ol
     from dlasweep.kernels import centres
 
     rng = np.random.default_rng(7 + dim + 10 * line)
@@ -309,19 +309,19 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
     # the fields against brute force (images included where the sides are periodic)
-    W, fs = gi[ol.MAP_WIDTH], 1 << ol.FS
+    W, fs = gi[geometry.MAP_WIDTH], 1 << ol.FS
     fw = (W + fs - 1) // fs
     images = [np.zeros(dim)]
     if line:
         images = [np.r_[np.array(s, float), 0.0] for s in np.ndindex(*(3,) * (dim - 1))]
         images = [(e - np.r_[np.ones(dim - 1), 0.0]) * np.r_[np.full(dim - 1, size), 0.0] for e in images]
-    off = gi[ol.MAP_OFFSET:ol.MAP_OFFSET + dim]
+    off = gi[geometry.MAP_OFFSET:geometry.MAP_OFFSET + dim]
     unit = np.concatenate([np.floor(pts + e).astype(int) + off for e in images])
     unit = unit[((unit >= 0) & (unit < W)).all(1)]
     top = centres.CENTRE_TOP[dim]
     centre = naive.centre_distances(unit, dim, fw, fs, centres.CENTRE_UNITS[dim], top)
     np.testing.assert_array_equal(naive.field_distances(field, dim, fw, top), centre)
-    assert centres.field_reach(centres.CCAP[dim - 2]) < ol.LINE_PAD  # a substrate's images are marked as far as it sees
+    assert centres.field_reach(centres.CCAP[dim - 2]) < geometry.LINE_PAD  # a substrate's images are marked as far as it sees
     assert (centre < top).sum() > 500  # the test sees the field, not only its cap
     if not line:
         # each level above: the distance from each cell's centre to the nearest held cell of the level below
@@ -395,30 +395,30 @@ def test_the_pyramid_bound_keeps_the_clusters_of_the_maps_bound(dim, before):
 
 def _found(pts, nxt, i, grid):
     """Whether the cell list finds particle i at its own centre."""
-    from dlasweep.kernels.offlattice import cells
+    from dlasweep.kernels.offlattice import celllist
     gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
     lx, ly, lz, li = (np.empty(1024), np.empty(1024), np.zeros(1024), np.empty(1024, np.int64))
-    nl, _ = cells.gather(np.r_[pts[i], 0.0], 0.25, 2, 0, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
+    nl, _ = celllist.gather(np.r_[pts[i], 0.0], 0.25, 2, 0, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)
     return i in li[:nl]
 
 
 def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     """A grid built with no room reserved gives its heads more room as tiles
-    fill (``cells.more_heads``), and a particle attached when they are full
+    fill (``celllist.more_heads``), and a particle attached when they are full
     waits (``HEADS_FULL``) and is put in by ``_index_late``: each is then
     found where it is."""
-    from dlasweep.kernels.offlattice import cells, grow
+    from dlasweep.kernels.offlattice import geometry, grid as ol, grow
     rng = np.random.default_rng(5)
     n = 4000
     pts = np.zeros((n + 1, 2))
     pts[:n] = rng.uniform(-1500, 1500, (n, 2))
     nxt = np.full(n + 1, -1, np.int32)
-    grid = cells.build_grid(2, False, 0, 1600.0, pts, n, nxt, 0)
+    grid = ol.build_grid(2, False, 0, 1600.0, pts, n, nxt, 0)
     gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
-    assert gi[cells.TILES_USED] > 64  # beyond the 64 tiles reserved: the heads grew
+    assert gi[geometry.TILES_USED] > 64  # beyond the 64 tiles reserved: the heads grew
     assert all(_found(pts, nxt, i, grid) for i in range(0, n, 7))
     # heads exactly full: a particle in a tile of its own must wait
-    heads = heads[: 64 * gi[cells.TILES_USED]].copy()
+    heads = heads[: 64 * gi[geometry.TILES_USED]].copy()
     geo = np.array([1500.0 * np.sqrt(2), 1500.0, -1.0])
     far = np.array([1550.0, 1550.0, 0.0])
     steps, parents = np.zeros(n + 1, np.uint32), np.zeros(n + 1, np.int32)
@@ -432,12 +432,12 @@ def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
 
 @pytest.mark.parametrize("case", ["3d", "plane", "2d"])
 def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
-    """``cells.sort_cells`` stores a grown cluster's rows cell after cell: each
+    """``celllist.sort_cells`` stores a grown cluster's rows cell after cell: each
     cell's list is then one ascending run of rows holding the particles of that
     cell and no other, a gather at any point finds the same particles (by their
     attachment numbers) at the same distances, and ``attachment_order`` gives
     back the rows in attachment order."""
-    from dlasweep.kernels.offlattice import cells
+    from dlasweep.kernels.offlattice import celllist, grid as ol
 
     params = VARIANTS[case]
     dim, size = params.get("dim", 2), params.get("size", 0)
@@ -447,7 +447,7 @@ def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
     need = grown[:, -1].max() if line else np.abs(grown).max()
     pts = grown.copy()
     nxt = np.full(n, -1, np.int32)
-    gi, gf, words, start, blocks, cellz, dirr, heads, field = cells.build_grid(dim, line, size, need, pts, n, nxt, 0)
+    gi, gf, words, start, blocks, cellz, dirr, heads, field = ol.build_grid(dim, line, size, need, pts, n, nxt, 0)
     rng = np.random.default_rng(1)
     probes = grown[rng.integers(0, n, 300)] + rng.uniform(-2.5, 2.5, (300, dim))
     lists = np.empty(1024), np.empty(1024), np.zeros(1024), np.empty(1024, np.int64)
@@ -455,34 +455,34 @@ def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
     def gathered(rows, order):
         found = []
         for c in probes:
-            nl, near2 = cells.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
+            nl, near2 = celllist.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
             found.append((sorted(order[lists[3][:nl]]), near2))
         return found
 
     before = gathered(pts, np.arange(n))
     order = np.arange(n, dtype=np.int32)
-    cells.sort_cells(pts, order, nxt, n, dim, gi, gf, dirr, heads)
+    celllist.sort_cells(pts, order, nxt, n, dim, gi, gf, dirr, heads)
     assert not (order == np.arange(n)).all()
     np.testing.assert_array_equal(pts, grown[order])
     assert gathered(pts, order) == before
-    place = [cells._cell_of(i, pts, dim, gi, gf) for i in range(n)]
+    place = [celllist._cell_of(i, pts, dim, gi, gf) for i in range(n)]
     for i in range(n):  # each run ascends within one cell and ends where the cell does
         assert nxt[i] == -1 or (nxt[i] == i + 1 and place[i] == place[i + 1])
         assert i == 0 or place[i - 1] == place[i] or nxt[i - 1] == -1
-    cells.attachment_order(pts, order, n)
+    celllist.attachment_order(pts, order, n)
     np.testing.assert_array_equal(pts, grown)
     np.testing.assert_array_equal(order, np.arange(n))
 
 
 @pytest.mark.parametrize("case", ["3d", "plane", "2d"])
 def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
-    """``cells.sort_tail`` stores the rows attached since ``sort_cells`` cell after cell,
+    """``celllist.sort_tail`` stores the rows attached since ``sort_cells`` cell after cell,
     whether they were pushed on the lists one by one or the grid was built anew over
     every row: a gather at any point finds the particles a grid of the same particles in
     attachment order finds (by attachment number) at the same distances; each of those
     rows' runs ascends within one cell and goes on to that cell's sorted rows; and the
     rows below the tail do not move."""
-    from dlasweep.kernels.offlattice import cells
+    from dlasweep.kernels.offlattice import celllist, grid as ol
 
     params = VARIANTS[case]
     dim, size = params.get("dim", 2), params.get("size", 0)
@@ -499,19 +499,19 @@ def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
         gi, gf, _, _, _, _, dirr, heads, _ = grid
         found = []
         for c in probes:
-            nl, near2 = cells.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
+            nl, near2 = celllist.gather(np.r_[c, 0.0][:3], 3.0, dim, size, rows, nxt, gi, gf, dirr, heads, *lists)
             found.append((sorted(order[lists[3][:nl]]), near2))
         return found
 
     def expected(count):
         pts = grown[:count].copy()
         nxt = np.full(count, -1, np.int32)
-        grid = cells.build_grid(dim, line, size, need, pts, count, nxt, 0)
+        grid = ol.build_grid(dim, line, size, need, pts, count, nxt, 0)
         return gathered(pts, count, np.arange(count), nxt, grid)
 
     def check_runs(pts, count, nxt, grid):
         gi, gf = grid[0], grid[1]
-        place = [cells._cell_of(i, pts, dim, gi, gf) for i in range(count)]
+        place = [celllist._cell_of(i, pts, dim, gi, gf) for i in range(count)]
         for i in range(first, count):
             j = nxt[i]
             assert j == i + 1 or j < first, i
@@ -521,20 +521,20 @@ def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
     pts = grown.copy()
     nxt = np.full(n, -1, np.int32)
     order = np.arange(n, dtype=np.int32)
-    grid = cells.build_grid(dim, line, size, need, pts, first, nxt, n)
+    grid = ol.build_grid(dim, line, size, need, pts, first, nxt, n)
     gi, gf, words, start, blocks, cellz, dirr, heads, field = grid
-    cells.sort_cells(pts, order, nxt, first, dim, gi, gf, dirr, heads)
+    celllist.sort_cells(pts, order, nxt, first, dim, gi, gf, dirr, heads)
     sorted_rows = pts[:first].copy()
     for i in range(first, middle):  # pushed one by one, as they attach
-        assert cells.insert(i, pts, nxt, dim, gi, gf, dirr, heads)
-    cells.sort_tail(pts, order, nxt, first, middle, dim, gi, gf, dirr, heads)
+        assert celllist.insert(i, pts, nxt, dim, gi, gf, dirr, heads)
+    celllist.sort_tail(pts, order, nxt, first, middle, dim, gi, gf, dirr, heads)
     assert not (order[first:middle] == np.arange(first, middle)).all()
     np.testing.assert_array_equal(pts[:middle], grown[order[:middle]])
     np.testing.assert_array_equal(pts[:first], sorted_rows)
     assert gathered(pts, middle, order, nxt, grid) == expected(middle)
     check_runs(pts, middle, nxt, grid)
-    grid = cells.build_grid(dim, line, size, need, pts, n, nxt, 0)  # as after a rebuild: every row pushed in turn
-    cells.sort_tail(pts, order, nxt, first, n, dim, grid[0], grid[1], grid[6], grid[7])
+    grid = ol.build_grid(dim, line, size, need, pts, n, nxt, 0)  # as after a rebuild: every row pushed in turn
+    celllist.sort_tail(pts, order, nxt, first, n, dim, grid[0], grid[1], grid[6], grid[7])
     np.testing.assert_array_equal(pts, grown[order])
     np.testing.assert_array_equal(pts[:first], sorted_rows)
     assert gathered(pts, n, order, nxt, grid) == expected(n)
@@ -559,14 +559,14 @@ def test_a_3d_cluster_grown_in_sorted_rows_keeps_its_parents_and_contacts():
 
 @pytest.mark.parametrize("case", ["2d", "3d", "block", "block-3d", "box", "2d-large"])
 def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case):
-    """``cells.regrow_grid`` (the centre field and the pyramid's first level copied
+    """``grid.regrow_grid`` (the centre field and the pyramid's first level copied
     from the outgrown grid, the levels above built from the first) gives every array of
     ``build_grid``'s grid, built from nothing for the same particles: a grown
     cluster's first m particles in a grid, the (m+1)-th outside it, as when
     growth outgrows a grid. The old field's whole pages go back to the OS: they read zeros.
     In the large 2D case most of the first level lies beyond the reach of the
     particles near the old grid's edge: it is copied, not lowered again."""
-    from dlasweep.kernels.offlattice import cells
+    from dlasweep.kernels.offlattice import geometry, grid as ol
 
     params = VARIANTS[case.removesuffix("-large")]
     dim = params.get("dim", 2)
@@ -580,16 +580,16 @@ def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case)
         if first >= len(pts):  # a box stops its cluster early
             break
         nxt = np.full(len(pts), -1, np.int32)
-        old = cells.build_grid(dim, False, size, extent[:first].max(), pts, first, nxt, 0)
-        beyond = extent + 8.0 > old[0][cells.COVERED]
+        old = ol.build_grid(dim, False, size, extent[:first].max(), pts, first, nxt, 0)
+        beyond = extent + 8.0 > old[0][geometry.COVERED]
         if not beyond.any():
             continue
         m = int(np.argmax(beyond))  # the first particle beyond the old grid
         rebuilds += 1
-        old = cells.build_grid(dim, False, size, extent[:first].max(), pts, m, nxt.copy(), 0)
-        tiles = old[0][cells.TILES_USED]
-        fresh = cells.build_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles)
-        carried = cells.regrow_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles,
+        old = ol.build_grid(dim, False, size, extent[:first].max(), pts, m, nxt.copy(), 0)
+        tiles = old[0][geometry.TILES_USED]
+        fresh = ol.build_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles)
+        carried = ol.regrow_grid(dim, False, size, extent[: m + 1].max(), pts, m + 1, nxt.copy(), tiles,
                                     old[0], old[8])
         for name, a, b in zip(("gi", "gf", "words", "start", "blocks", "cells", "dirr", "heads", "field"), fresh,
                               carried):
@@ -603,15 +603,15 @@ def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case)
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_rebuild_lowers_again_exactly_the_cells_the_old_grid_lacked(dim):
-    """``cells.regrow_grid`` on arms that end at the last cells whose reach crosses the
+    """``grid.regrow_grid`` on arms that end at the last cells whose reach crosses the
     old grid's edge, of the centre field (along -y) and of the pyramid's first level
     (along -x): their lowering beyond that edge is kept, so the grid equals
     ``build_grid``'s (a reach one cell shorter loses it: the field differs)."""
     from dlasweep.kernels.centres import CCAP, FCAP, FS
-    from dlasweep.kernels.offlattice import cells
+    from dlasweep.kernels.offlattice import geometry, grid as ol
 
     step = maps.PYRAMID_STEP[dim]
-    half = cells._layout(dim, False, 0, 300.0)[0][cells.COVERED]
+    half = geometry.layout(dim, False, 0, 300.0)[0][geometry.COVERED]
     x_end = half - ((FCAP[dim - 2] - 2) << (FS + step)) - 3  # first level: index FCAP - 2 from the edge
     y_end = half - ((CCAP[dim - 2] - 2) << FS) - 1  # field: index CCAP - 2
     arms = [np.c_[np.arange(0, 301.0), np.zeros(301)], np.c_[-np.arange(1, x_end + 1.0), np.zeros(x_end)],
@@ -621,10 +621,10 @@ def test_a_rebuild_lowers_again_exactly_the_cells_the_old_grid_lacked(dim):
     assert ((half - x_end) >> (FS + step), (half - y_end) >> FS) == (FCAP[dim - 2] - 2, CCAP[dim - 2] - 2)
     n = len(pts)
     nxt = np.full(n, -1, np.int32)
-    old = cells.build_grid(dim, False, 0, 300.0, pts, n - 1, nxt.copy(), 0)
-    assert old[0][cells.COVERED] == half
-    need, tiles = np.abs(pts).max(), old[0][cells.TILES_USED]
-    fresh = cells.build_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles)
-    carried = cells.regrow_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles, old[0], old[8])
+    old = ol.build_grid(dim, False, 0, 300.0, pts, n - 1, nxt.copy(), 0)
+    assert old[0][geometry.COVERED] == half
+    need, tiles = np.abs(pts).max(), old[0][geometry.TILES_USED]
+    fresh = ol.build_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles)
+    carried = ol.regrow_grid(dim, False, 0, need, pts, n, nxt.copy(), tiles, old[0], old[8])
     for name, a, b in zip(("gi", "gf", "words", "start", "blocks", "cells", "dirr", "heads", "field"), fresh, carried):
         np.testing.assert_array_equal(a, b, err_msg=name)

@@ -19,7 +19,7 @@ from dlasweep.kernels.lattice import grow as lattice_grow
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.words import rebuild
 from dlasweep.kernels.model import sticks_xo
-from dlasweep.kernels.offlattice import cells
+from dlasweep.kernels.offlattice import grid
 from dlasweep.kernels.offlattice import grow as offlattice_grow
 
 
@@ -64,7 +64,7 @@ def test_the_walks_two_jumps_are_one_text():
 
 
 def test_the_walks_map_bound_is_walk_bound_spelled_out():
-    assert copy(offlattice_grow._walk, "walk_bound") == body(cells.walk_bound)
+    assert copy(offlattice_grow._walk, "walk_bound") == body(grid.walk_bound)
 
 
 def _clustered(rng, dim, line, size, n):
@@ -87,10 +87,10 @@ def test_walk_bound_is_map_dist(dim, line):
     n = 600 if dim == 2 else 1500
     pts = _clustered(rng, dim, line, size, n)
     need = pts[:, -1].max() if line else np.abs(pts).max()
-    gi, _, words, start, blocks, cellz, _, _, field = cells.build_grid(
+    gi, _, words, start, blocks, cellz, _, _, field = grid.build_grid(
         dim, line, size, need, pts, n, np.full(n, -1, np.int32), 0)
-    per, m0, m1, m2, W, fw, flo, ftop = cells.walk_geometry(gi, cellz, dim)
-    pstart = cells.level_starts(gi, dim)
+    per, m0, m1, m2, W, fw, flo, ftop = grid.walk_geometry(gi, cellz, dim)
+    pstart = grid.level_starts(gi, dim)
     assert per == line
     scale = rng.choice([0.5, 3.0, 15.0, 60.0, 200.0], 20000)
     q = pts[rng.integers(0, n, 20000)] + rng.normal(0, 1, (20000, dim)) * scale[:, None]
@@ -100,17 +100,17 @@ def test_walk_bound_is_map_dist(dim, line):
     balls = 0
     for x in q:
         w = np.r_[x, np.zeros(3 - dim)]
-        want = cells.map_dist(w, dim, size, gi, words, start, blocks, cellz, field)
+        want = grid.map_dist(w, dim, size, gi, words, start, blocks, cellz, field)
         moved = w.copy()
-        got, ball, gap, shift = cells.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field,
+        got, ball, gap, shift = grid.walk_bound(moved, dim, size, per, m0, m1, m2, W, words, start, blocks, field,
                                                  fw, flo, ftop, pstart, False)
         assert got == want, (x, got, want)
         # a walker from far reads the pyramid first: the same bound and ball
-        assert cells.walk_bound(w.copy(), dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop,
+        assert grid.walk_bound(w.copy(), dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw, flo, ftop,
                                 pstart, True)[:2] == (got, ball), x
         if ball > 0.0:
-            grid = moved[:dim] + np.array([m0, m1, m2][:dim])
-            centre = ((grid.astype(np.int64) >> shift) << shift) + (1 << (shift - 1)) - np.array([m0, m1, m2][:dim])
+            at = moved[:dim] + np.array([m0, m1, m2][:dim])
+            centre = ((at.astype(np.int64) >> shift) << shift) + (1 << (shift - 1)) - np.array([m0, m1, m2][:dim])
             assert np.sqrt(((pts - centre) ** 2).sum(1)).min() >= ball - 1e-9
             assert abs(np.sqrt(((moved[:dim] - centre) ** 2).sum()) - gap) < 1e-9
             assert got == ball - gap

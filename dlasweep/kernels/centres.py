@@ -1,6 +1,6 @@
 """The centre field and the centre pyramid: distances from cells' centres to
 the nearest particle, which bound a walker's distance to the cluster from
-below (``offlattice.cells.map_dist``, ``lattice.grow._distance_bound``).
+below (``offlattice.grid.map_dist``, ``lattice.grow._distance_bound``).
 
 Level 0 is the kernel's own field. Off-lattice it is the centre field, a
 byte per coarse cell of side ``2**FS``: the distance from its centre to the
@@ -361,7 +361,7 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     the walker's previous far jump used (the same clusters) took 0.82 to 1.27
     times the time at 3D lattice 1e6 (10 seeds, median 1.02), 1.002 and 0.952
     at 1e7 (2 seeds). Nor in the off-lattice walk, its far walkers past the field
-    (``offlattice.cells.FAR_CLEAR``): the search from the level of the walker's last
+    (``offlattice.grid.FAR_CLEAR``): the search from the level of the walker's last
     ball exit, down only while the level below might not be at its cap (a level whose
     value puts the one below at least its cap away, less the way between their
     centres, ends it unread), took 1.027 and 1.096 times the time at 2D 1e7, 0.968

@@ -2,8 +2,10 @@
 
 Two particles touch when their centres are exactly one diameter apart.
 
-- ``cells``: the cell list and the hierarchical maps, which bound the free
-  distance of a walker from below;
+- ``geometry``: where the grid lies (``gi``, ``gf``);
+- ``celllist``: the cell list, which finds the particles near a point;
+- ``grid``: the hierarchical maps, the centre field and pyramid, which bound
+  the free distance of a walker from below, built and regrown with the cell list;
 - ``contact``: the exact ray cast to contact, the Gaussian steps and the
   rebound of a walker that did not stick;
 - ``grow``: the walk from release to contact, attachment, the lockstep
@@ -64,8 +66,8 @@ the Generator, so a cluster is a function of its seed.
 
 Memory: besides the points (16 or 24 bytes each), the diffusion times (4),
 the parents (4), the cell-list links (4) and in 3D the attachment number of
-each stored row (4: the rows are kept cell after cell, ``cells.sort_cells``
-and ``cells.sort_tail``, so that a gather reads a cell's particles from a stretch or two;
+each stored row (4: the rows are kept cell after cell, ``celllist.sort_cells``
+and ``celllist.sort_tail``, so that a gather reads a cell's particles from a stretch or two;
 ``sort_tail`` holds 12 bytes a row attached since the last full sort, a fifth at most), the grids take about a bit per unit cell
 (maps), a byte per cell of side ``2**FS`` (centre field) and 4 bytes per tile of
 64 cell-list cells (directory) over a square ``GROW`` times the cluster's
@@ -74,7 +76,7 @@ outgrows them they are dropped, and the larger ones built in the walk
 loop's next pass: numba frees an array held across a loop's passes only
 when the pass ends, so building them in the same pass held both. The
 centre field alone (with the pyramid above it) is kept until the new grid
-has copied it and the pyramid's first level (``cells.regrow_grid``: no
+has copied it and the pyramid's first level (``grid.regrow_grid``: no
 particle lowers their cells again but those near the old grid's edge), its
 pages then handed back to the OS.
 (With walkers > 1 both are still held during a rebuild: the box bounds them.)
@@ -85,8 +87,8 @@ growth (each inlined gather handed on 11 arrays). The walk, the attachment
 and their helpers are therefore compiled by ``_jit.borrow``, without
 reference counting (they allocate nothing). The walk inlines the direction
 draw, the gather of the neighbour list and the ray cast (``walk.xdir``,
-``cells.gather``, ``contact.ray_to``) and spells out the map query (a
-pinned copy of ``cells.walk_bound``).
+``celllist.gather``, ``contact.ray_to``) and spells out the map query (a
+pinned copy of ``grid.walk_bound``).
 """
 
 from .contact import EPS

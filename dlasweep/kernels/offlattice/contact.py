@@ -11,7 +11,8 @@ import numpy as np
 from ..._jit import borrow, inline, jit
 from ..model import sticks
 from ..walk import unit_vector
-from .cells import gather, map_dist
+from .celllist import gather
+from .grid import map_dist
 
 EPS = 1e-3
 """Surface gap (diameters) below which a walker ray-casts to contact."""

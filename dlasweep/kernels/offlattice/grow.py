@@ -2,7 +2,7 @@
 attachment of particles, and the lockstep walkers.
 
 Far from the cluster a walker moves by walk-on-spheres jumps onto the
-sphere whose radius is a lower bound on its free distance (``cells``:
+sphere whose radius is a lower bound on its free distance (``grid``:
 field, maps, and the cluster's bounding circle); where the centre pyramid
 gives that bound, out of the larger ball about the centre of its cell that
 holds no particle, by the exact exit law (``walk.ball_exit``). Near it, exact nearest
@@ -18,31 +18,14 @@ from numba import literally
 from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
+from ..centres import FS, cell_centre, centre_bound, pyramid_ball
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
 from ..walk import ball_exit, return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
-from .cells import (
-    COVERED,
-    FAR_CLEAR,
-    INF,
-    NEAR,
-    TILES_USED,
-    attachment_order,
-    build_grid,
-    face_gap,
-    gather,
-    insert,
-    level_starts,
-    map_dist,
-    mark,
-    more_heads,
-    no_grid,
-    regrow_grid,
-    sort_cells,
-    sort_tail,
-    walk_geometry,
-)
-from ..centres import FS, cell_centre, centre_bound, pyramid_ball
+from .celllist import INF, attachment_order, gather, insert, more_heads, sort_cells, sort_tail
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
+from .geometry import COVERED, TILES_USED
+from .grid import (FAR_CLEAR, NEAR, build_grid, face_gap, level_starts, map_dist, mark, no_grid, regrow_grid,
+                   walk_geometry)
 
 LIST_RADIUS = 3.0
 """Radius (centre distance) of the cached neighbour list. Longer lists give
@@ -57,7 +40,7 @@ LCAP = 1024
 3D holds < 200)."""
 BY_CELL = (False, False, False, True)
 """By dimension: whether the particles' rows are stored cell after cell while the cluster grows
-(``cells.sort_cells``), at 4 bytes a particle for their attachment numbers. 2D rows by cell,
+(``celllist.sort_cells``), at 4 bytes a particle for their attachment numbers. 2D rows by cell,
 1e7 side by side (seeds 1 and 2): 1.056 and 1.048 times the time (the same clusters); again with
 the tail sorts (``TAIL_SORT``), seed 1: 1e6 1.031, 1e7 1.059 times, the peak 18 MB higher."""
 SORT_FIRST = 4096
@@ -67,7 +50,7 @@ SORT_GROWTH = 1.25
 particles, sorted apart (``TAIL_SORT``), are a fifth of all at most. 3D 3e6, one after the other on one
 core (a benchmark on the other): 1.1 took 64.0 s against 60.9, 1.5 60.3 against 58.5."""
 TAIL_SORT = 32
-"""Between sorts, the rows attached since the last are sorted by cell (``cells.sort_tail``) each
+"""Between sorts, the rows attached since the last are sorted by cell (``celllist.sort_tail``) each
 time the cluster has grown by a ``TAIL_SORT``-th: walkers arrive where the cluster grows, and a
 gather read more than half its particles (3D 1e6, 14 of 27; 3e6, 16) from rows attached since the
 last sort, one scattered row each; with these sorts, 3 of 27 are read from rows stored since
@@ -79,7 +62,7 @@ GAUSS_JUMP = 4.0
 
 @jit
 def _neighbour_list():
-    """Empty arrays for ``cells.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
+    """Empty arrays for ``celllist.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
     return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
 
 
@@ -127,7 +110,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
     and 124.6; 3D, 24.7 us a particle at 3e6 against 22.2 (108.0 steps a particle
     against 103.0: 0.9% of walkers released again, 10% at 1e5). Keeping two walkers'
     state costs what their overlapped reads save: the step's own reads are not where
-    a large cluster's time grows (``cells.gather``).
+    a large cluster's time grows (``celllist.gather``).
 
     Parameters
     ----------
@@ -145,8 +128,8 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
         Receives the walker's place where it sticks.
     rs : uint64 (4,)
         The xoshiro256+ stream; ``rng`` the numpy Generator.
-    The rest: scratch arrays, the neighbour lists and the grid (``cells``),
-    ``pstart`` the centre pyramid's level starts (``cells.level_starts``);
+    The rest: scratch arrays, the neighbour lists and the grid (``grid``),
+    ``pstart`` the centre pyramid's level starts (``grid.level_starts``);
     ``geo`` holds r_max, the Chebyshev extent and h_max.
 
     Returns
@@ -182,7 +165,7 @@ def _walk(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scra
         s0, s1, s2, s3 = _release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3)
         list_ok = False
         nl = 0
-        far = True  # from the launch circle, a return to it or a ball's exit: the pyramid first (``cells.FAR_CLEAR``)
+        far = True  # from the launch circle, a return to it or a ball's exit: the pyramid first (``grid.FAR_CLEAR``)
         while True:
             if max_steps > 0 and total >= max_steps:
                 code = 2
@@ -417,7 +400,7 @@ def _attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim
             blocks, cells, dirr, heads, field):
     """Add the walker at w to the cluster, its parent the particle it touched
     (``contact.settle`` records its row of ``pts``; ``order`` holds each row's
-    attachment number where the rows are stored by cell, ``cells.sort_cells``).
+    attachment number where the rows are stored by cell, ``celllist.sort_cells``).
     Returns the new count and ``IN_GRID``, ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
     cell-list tiles (then the particle is not yet in the grid: the caller
     drops it and builds a larger one). It takes the grid's arrays one by one

@@ -1,32 +1,24 @@
-"""The off-lattice grid: a cell list of the particles and the hierarchical maps.
+"""The off-lattice grid: the cell list and the maps that bound a walker's free distance.
 
-A cell list (cells of side ``CELL_SIDE`` in tiles of 64 cells, allocated only where
-particles are, so memory follows the cluster) answers which particles lie
-near a point (``gather``). The dilated maps of ``maps`` (level 1, and the
-levels above it only where no pyramid is: ``_allocate_maps``), a centre
-field (a byte per coarse cell of side ``2**FS``: the distance from its centre to the nearest
-particle's unit cell, to ``CCAP`` cells, ``_centre_lower``) and the centre
-pyramid above it (each level's cell holds the distance from its centre to the
-nearest held cell of the level below, to ``FCAP`` cells, ``centres.pyramid_lower``)
-bound the distance to the nearest particle from below (``map_dist``). The
-centre field is the pyramid's level 0, in the same array (``maps.pyramid_starts``'
+The dilated maps of ``maps`` (level 1, and the levels above it only where no
+pyramid is: ``_allocate_maps``), a centre field (a byte per coarse cell of
+side ``2**FS``: the distance from its centre to the nearest particle's unit
+cell, to ``CCAP`` cells, ``_centre_lower``) and the centre pyramid above it
+(each level's cell holds the distance from its centre to the nearest held
+cell of the level below, to ``FCAP`` cells, ``centres.pyramid_lower``) bound
+the distance to the nearest particle from below (``map_dist``). The centre
+field is the pyramid's level 0, in the same array (``maps.pyramid_starts``'
 layout).
 
-The grid's geometry is two small arrays built by ``_layout``, ``gi``
-(integers) and ``gf`` (floats), read through the named slots below (numba
-freezes them into the kernels as constants).
-
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
-field)`` that ``build_grid`` returns. The particles' rows may be stored cell
-after cell (``sort_cells``): the cell list then links rows, and the caller
-keeps each row's attachment number.
+field)`` that ``build_grid`` returns: the geometry (``geometry.layout``), the
+maps, the cell list's directory and heads (``celllist``), and the field.
 """
 
 import numpy as np
 
-from ..._jit import borrow, inline, jit
+from ..._jit import borrow, jit
 from .. import maps
-from ..model import GRID_GROWTH
 from ..centres import (
     CCAP,
     CENTRE_OWN,
@@ -41,249 +33,19 @@ from ..centres import (
     pyramid_dist,
     pyramid_lower,
 )
-
-LINE_PAD = 32
-"""Periodic images are marked in the maps up to this distance (line seed)."""
-CELL_SIDE = (8, 4)
-"""Side of the cell list's cells (diameters), 2D and 3D: a power of two, a multiple of the coarse
-cells' ``2**FS``. A side of 4 puts four times the area under a tile's 64 heads: memory added by
-growth, 2D 1e7 37.8 -> 29.3 B/particle, 3D 3e5 53.4 -> 44.8, against a side of 2, with the same
-particles gathered (the same clusters) in the same time (2D 1e6, A/B: 10.53 s against 10.61).
-A side of 8 in 2D again: 2D 1e7 32.24 -> 30.62, the same clusters, 6% slower (61.1 s against
-57.5, side by side), as a gather reads twice the particles; cells of 8 by 4 saved half as much
-memory in the same time (62.9 s against 59.4)."""
-GROW = GRID_GROWTH["offlattice"]
-"""The grids' growth (``model.GRID_GROWTH``), a module constant that numba freezes into the kernels."""
-HEADS_RESERVE = 2.0
-"""The cell list's heads are reserved for this many times the tiles the cluster would hold after
-growing by ``GROW``: its pages cost memory only once a tile is used (``maps.zeroed``), and a
-cell list that outgrows them is copied, the old and new held at once."""
-INF = np.inf
-
-# Slots of gi, the grid's integer geometry (a mutable array: the cell list counts its tiles in it).
-CELLS = 0  # 0-2: cell-list cells per axis
-TILES = 3  # 3-5: cell-list tiles per axis
-MAP_OFFSET = 6  # 6-8: where coordinate 0 falls in the maps, per axis
-MAP_WIDTH = 9  # cells a side of the maps
-PERIODIC = 10  # 10-12: 1 on a substrate's periodic axes
-TILE_SHIFT = 13  # cell-list tiles have 2**TILE_SHIFT cells a side
-TILES_USED = 14  # cell-list tiles allocated
-TOP_LEVEL = 15  # largest usable map level
-COVERED = 16  # half-width (point seeds) or height (substrate) the grid covers
-FIELD_CAP = 17  # the distance field's cap, in coarse cells
-PYRAMID_LEVELS = 18  # most levels of the centre pyramid
-GI_SLOTS = 19
-# Slots of gf, the grid's float geometry.
-ORIGIN = 0  # 0-2: the cell list's origin per axis
-INV_SIDE = 3  # 3-5: inverse cell side per axis
-PERIOD = 6  # a substrate's period
-GF_SLOTS = 8
-
-
-@jit
-def _layout(dim, line, size, need):
-    """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
-    for point seeds, h_max for a substrate), with room to grow."""
-    gi = np.zeros(GI_SLOTS, np.int64)
-    gf = np.zeros(GF_SLOTS)
-    tb = 3 if dim == 2 else 2
-    gi[TILE_SHIFT] = tb
-    side = CELL_SIDE[dim - 2]
-    up = dim - 1
-    gf[PERIOD] = float(size)
-    if not line:
-        half = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
-        if size > 0:
-            half = min(half, ((size // 2 + 8) // 16 + 1) * 16)
-        gi[COVERED] = half
-        gi[MAP_WIDTH] = 2 * half
-        gi[TOP_LEVEL] = 1 << 30
-        gi[FIELD_CAP] = FCAP[dim - 2]
-        gi[PYRAMID_LEVELS] = 64
-        for a in range(dim):
-            gi[CELLS + a] = 2 * half // side
-            gi[MAP_OFFSET + a] = half
-            gf[ORIGIN + a] = -float(half)
-            gf[INV_SIDE + a] = 1.0 / side
-    else:
-        top = int(np.ceil(GROW * (need + 8.0) / 16.0)) * 16
-        gi[COVERED] = top
-        gi[MAP_WIDTH] = max(size + 2 * LINE_PAD, top + 2)
-        gi[TOP_LEVEL] = 4  # 2**(4+1) = LINE_PAD: a clear cell's neighbourhood stays within the pad
-        gi[FIELD_CAP] = LINE_PAD >> FS
-        gi[PYRAMID_LEVELS] = 1  # the centre field alone (its reach within the pad): a pyramid level would reach beyond
-        m = max(size // side, 1)
-        for a in range(up):
-            gi[CELLS + a] = m
-            gi[MAP_OFFSET + a] = LINE_PAD
-            gi[PERIODIC + a] = 1
-            gf[ORIGIN + a] = 0.0
-            gf[INV_SIDE + a] = m / float(size)
-        gi[CELLS + up] = (top + 2) // side + 1
-        gi[MAP_OFFSET + up] = 2
-        gf[ORIGIN + up] = -2.0
-        gf[INV_SIDE + up] = 1.0 / side
-    for a in range(3):
-        if a >= dim:
-            gi[CELLS + a] = 1
-            gi[TILES + a] = 1
-        else:
-            gi[TILES + a] = (gi[CELLS + a] + (1 << tb) - 1) >> tb
-    return gi, gf
-
-
-@borrow
-def _cell_of(i, pts, dim, gi, gf):
-    """Particle i's cell in the cell list: its tile's place in the directory and its place in the tile."""
-    c0 = min(max(int(np.floor((pts[i, 0] - gf[ORIGIN]) * gf[INV_SIDE])), 0), gi[CELLS] - 1)
-    c1 = min(max(int(np.floor((pts[i, 1] - gf[ORIGIN + 1]) * gf[INV_SIDE + 1])), 0), gi[CELLS + 1] - 1)
-    c2 = 0
-    if dim == 3:
-        c2 = min(max(int(np.floor((pts[i, 2] - gf[ORIGIN + 2]) * gf[INV_SIDE + 2])), 0), gi[CELLS + 2] - 1)
-    tb = gi[TILE_SHIFT]
-    m = (1 << tb) - 1
-    t = (c0 >> tb) + gi[TILES] * ((c1 >> tb) + gi[TILES + 1] * (c2 >> tb))
-    return t, (c0 & m) | ((c1 & m) << tb) | ((c2 & m) << (2 * tb))
-
-
-@borrow
-def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
-    """Push particle i on its cell's list. False, and nothing changed, when
-    its tile is new and the heads are full (give them ``more_heads``)."""
-    t, loc = _cell_of(i, pts, dim, gi, gf)
-    tile = dirr[t] - 1
-    if tile < 0:
-        tile = gi[TILES_USED]
-        if (tile + 1) * 64 > len(heads):  # beyond build_grid's reserve: rare
-            return False
-        gi[TILES_USED] += 1
-        dirr[t] = tile + 1
-    h = tile * 64 + loc
-    nxt[i] = heads[h] - 1
-    heads[h] = i + 1
-    return True
-
-
-@jit
-def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
-    """Store particles 0..count-1 cell after cell, and their lists in that order.
-
-    A gather then reads each cell's particles from one stretch of ``pts``
-    instead of one cache line each, scattered in attachment order. Rows of
-    ``pts`` and ``order`` (the attachment number of the particle in each row)
-    move together; ``nxt`` and ``heads`` serve as scratch, then hold the lists
-    again, each cell's rows in ascending order. Nothing is allocated: the
-    permutation is followed cycle by cycle in place. The tiles renumbered in the
-    directory's order first (neighbouring tiles' heads and rows together) took 1.014
-    and 1.000 times the time at 3D 1e7 (seeds 1 and 2, the same clusters).
-    """
-    used = gi[TILES_USED] * 64
-    heads[:used] = 0
-    for i in range(count):
-        t, loc = _cell_of(i, pts, dim, gi, gf)
-        nxt[i] = (dirr[t] - 1) * 64 + loc  # the particle's cell, until its row replaces it
-        heads[nxt[i]] += 1
-    run = 0
-    for h in range(used):
-        here = heads[h]
-        heads[h] = run
-        run += here
-    for i in range(count):
-        h = nxt[i]
-        nxt[i] = heads[h]  # the row particle i moves to
-        heads[h] += 1
-    _move_rows(pts, order, nxt, 0, count, dim)
-    first = 0
-    for h in range(used):
-        end = heads[h]  # one past the cell's last row
-        heads[h] = first + 1 if end > first else 0
-        for i in range(first, end):
-            nxt[i] = i + 1 if i + 1 < end else -1
-        first = end
-
-
-@borrow
-def _move_rows(pts, order, nxt, first, count, dim):
-    """Move the rows first..count-1 of ``pts`` and ``order`` to the rows ``nxt`` names, in
-    place, cycle by cycle (``nxt`` of each then names its own row)."""
-    for i in range(first, count):
-        while nxt[i] != i:
-            j = nxt[i]
-            for a in range(dim):
-                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
-            order[i], order[j] = order[j], order[i]
-            nxt[i], nxt[j] = nxt[j], j
-
-
-@jit
-def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
-    """Store rows first..count-1 cell after cell, each cell's run linked ahead of its rows below ``first``.
-
-    The rows below ``first`` were stored by ``sort_cells``; those attached
-    since then sit in attachment order and are pushed on their cells' lists
-    ahead of them (as is every row at or past ``first`` after a
-    ``regrow_grid``). Sorting these alone costs the rows attached since
-    ``first``, not the cluster, and their runs replace a gather's reads of
-    one scattered row each. ``nxt`` of those rows serves as scratch; three
-    arrays of at most ``count - first`` int32 are allocated.
-    """
-    n = count - first
-    below = np.empty(n, np.int32)  # per cell of the tail: its list's first row below ``first``
-    cell = np.empty(n, np.int32)  # per cell of the tail: its place in ``heads``
-    run = np.zeros(n, np.int32)  # per cell of the tail: its count, then where its run ends
-    seen = 0
-    for i in range(first, count):
-        t, loc = _cell_of(i, pts, dim, gi, gf)
-        h = (dirr[t] - 1) * 64 + loc
-        k = -heads[h] - 1  # a cell already met holds -(its number + 1)
-        if k < 0:
-            j = heads[h] - 1
-            while j >= first:  # the cell's rows at or past ``first`` come first on its list
-                j = nxt[j]
-            k = seen
-            seen += 1
-            below[k] = j
-            cell[k] = h
-            heads[h] = -(k + 1)
-        run[k] += 1
-        nxt[i] = k  # the row's cell, until its new row replaces it (its list is walked already)
-    end = first
-    for k in range(seen):
-        here = run[k]
-        run[k] = end
-        end += here
-    for i in range(first, count):
-        k = nxt[i]
-        nxt[i] = run[k]  # the row particle i moves to
-        run[k] += 1
-    _move_rows(pts, order, nxt, first, count, dim)
-    begin = first
-    for k in range(seen):
-        end = run[k]
-        for i in range(begin, end - 1):
-            nxt[i] = i + 1
-        nxt[end - 1] = below[k]
-        heads[cell[k]] = begin + 1
-        begin = end
-
-
-@jit
-def attachment_order(pts, order, count):
-    """Put the rows of ``pts`` back in attachment order (undo ``sort_cells``), in place."""
-    for i in range(count):
-        while order[i] != i:
-            j = order[i]
-            for a in range(pts.shape[1]):
-                pts[i, a], pts[j, a] = pts[j, a], pts[i, a]
-            order[i], order[j] = order[j], j
-
-
-@jit
-def more_heads(heads):
-    """The cell list's heads with room for half as many tiles again."""
-    bigger = maps.zeroed(len(heads) + len(heads) // 2, np.int32)
-    bigger[: len(heads)] = heads
-    return bigger
+from .celllist import empty_heads, insert_all
+from .geometry import (
+    FIELD_CAP,
+    GF_SLOTS,
+    GI_SLOTS,
+    MAP_OFFSET,
+    MAP_WIDTH,
+    PERIODIC,
+    PYRAMID_LEVELS,
+    TILES,
+    TOP_LEVEL,
+    layout,
+)
 
 
 @borrow
@@ -351,11 +113,11 @@ def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
 @jit
 def _empty_grid(dim, line, size, need, tiles):
     """A grid sized for ``need`` that holds no particle, with room for ``tiles`` cell-list tiles."""
-    gi, gf = _layout(dim, line, size, need)
+    gi, gf = layout(dim, line, size, need)
     words, start, blocks, cells = _allocate_maps(dim, gi)
     ntiles = gi[TILES] * gi[TILES + 1] * gi[TILES + 2]
     dirr = maps.zeroed(ntiles, np.int32)
-    heads = maps.zeroed(64 * (int(HEADS_RESERVE * GROW ** dim * tiles) + 64), np.int32)
+    heads = empty_heads(dim, tiles)
     field = maps.pyramid_allocate(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
     return gi, gf, words, start, blocks, cells, dirr, heads, field
 
@@ -365,19 +127,10 @@ def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     """Maps and cell list for particles 0..count-1, sized for ``need``, with
     room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
-    heads = _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
+    heads = insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
     for i in range(count):
         mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
     return gi, gf, words, start, blocks, cells, dirr, heads, field
-
-
-@jit
-def _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads):
-    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled)."""
-    for i in range(count):
-        while not insert(i, pts, nxt, dim, gi, gf, dirr, heads):
-            heads = more_heads(heads)
-    return heads
 
 
 @jit
@@ -409,9 +162,9 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     if line:
         return build_grid(dim, line, size, need, pts, count, nxt, tiles)
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
-    heads = _insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
+    heads = insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
     W, old_W = gi[MAP_WIDTH], old_gi[MAP_WIDTH]
-    shift = gi[MAP_OFFSET] - old_gi[MAP_OFFSET]  # sites, a multiple of 16 (``_layout``)
+    shift = gi[MAP_OFFSET] - old_gi[MAP_OFFSET]  # sites, a multiple of 16 (``geometry.layout``)
     step = maps.PYRAMID_STEP[dim]
     levels = maps.pyramid_starts(dim, W, gi[FIELD_CAP], gi[PYRAMID_LEVELS])
     old_levels = maps.pyramid_starts(dim, old_W, old_gi[FIELD_CAP], old_gi[PYRAMID_LEVELS])
@@ -657,112 +410,6 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
             f = face_gap(X0, X1, X2, dim, lo)
             dm = max(dm, side + f)
     return dm, ball, gap, shift
-
-
-@inline
-def _span(v, r, nc, periodic, origin, inv):
-    """Index cells covering [v - r, v + r] on one axis (may wrap if periodic)."""
-    lo = int(np.floor((v - r - origin) * inv))
-    hi = int(np.floor((v + r - origin) * inv))
-    if periodic:
-        return lo, min(hi, lo + nc - 1)
-    return max(lo, 0), min(hi, nc - 1)
-
-
-@inline
-def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
-    """Particles with centres within r of point c, as the images nearest c.
-
-    Fills lx, ly, lz (coordinates) and li (indices); returns the count and
-    the smallest squared centre distance among them (inf when none). Inlined
-    into the walk, which borrows (``_jit.borrow``): inlined into a function
-    that counts references, it counted those of its 11 arrays at every call.
-
-    A gather of the walk reads 27 particles in 5 of 16 cells to keep 2 (3D 1e5
-    to 1e6, 10 to 14 of them stored since the last ``sort_cells``, before ``sort_tail``); the lists
-    walked in turn, a particle of each at a time so that their reads overlap,
-    took 0.97 to 1.18 times the time at 3D 1e6 (4 seeds, the same clusters).
-    Skipping the window's cells that lie outside the ball (their box's distance
-    from c, on the axes that do not wrap) took 1.041 and 1.063 times the time at
-    3D 1e7 (seeds 1 and 2, the same clusters).
-
-    Where a large cluster's time goes: 2D, 4.4 gathers a particle at 1e5, 1e6 and 1e7
-    (seed 1, clocked about each call) took 219, 301 and 586 ns each, 22% of the walk's
-    time at 1e5 and 37% at 1e7, 59% of the walk's growth in time a particle from 1e5 to
-    1e7 (the rest of a walk step: 78 ns at 1e5, 88 at 1e7); 3D, 11 a particle, 417, 603
-    and 660 ns at 1e5, 1e6 and 3e6, 34% of the walk's time at each and 35% of its growth
-    from 1e5 to 3e6 (the rest of a walk step: 98 ns at 1e5, 134 at 3e6). The
-    round-robin walk above at 2D 1e7, side by side (seeds 1 and 2, the same clusters):
-    28.07 and 24.53 s of gathers against 28.07 and 24.88; the lists walked first for
-    their rows, the rows read after (reads that no longer wait on one another), 31.26
-    and 31.24 s against 34.25 and 29.57. A gather reads 18.8 particles from 1.9 cells
-    in 2D (1e5 and 1e6), 26.8 from 5.2 in 3D. Rows by cell (``grow.BY_CELL``)
-    cut 2D 1e7's gathers to 20.19 s from 28.29, and their sorts took 10.30 s of grid
-    work against 3.25. The particles' numbers by cell instead, the rows left in place
-    (each cell's run of numbers, rebuilt by a counting sort each time the cluster grew
-    by a 32nd, the newer particles from the lists): 2D 1e7 (seeds 1 and 2, the same
-    clusters), 575 and 544 ns a gather against 719 and 681, 1e5 331 and 298 against
-    259 and 261; the rebuilds took 10.68 s of grid work against 3.41. Rebuilt each
-    time it grew by a quarter: 647 and 629 ns against 674 and 640 at 1e7, as the
-    walkers' gathers read mostly the particles attached since.
-    """
-    r2 = r * r
-    nl = 0
-    near2 = INF
-    lo0, hi0 = _span(c[0], r, gi[CELLS], gi[PERIODIC] == 1, gf[ORIGIN], gf[INV_SIDE])
-    lo1, hi1 = _span(c[1], r, gi[CELLS + 1], gi[PERIODIC + 1] == 1, gf[ORIGIN + 1], gf[INV_SIDE + 1])
-    lo2, hi2 = 0, 0
-    if dim == 3:
-        lo2, hi2 = _span(c[2], r, gi[CELLS + 2], False, gf[ORIGIN + 2], gf[INV_SIDE + 2])
-    p0 = gi[PERIODIC] == 1
-    p1 = gi[PERIODIC + 1] == 1
-    n0, n1, t0, t1 = gi[CELLS], gi[CELLS + 1], gi[TILES], gi[TILES + 1]
-    tb = gi[TILE_SHIFT]
-    m = (1 << tb) - 1
-    half = 0.5 * size
-    # first the heads of the window's cells, kept at the end of li, then their lists: the
-    # reads of the lists' first particles no longer wait on one another
-    top = len(li) - 1
-    nh = 0
-    for k2 in range(lo2, hi2 + 1):
-        for k1 in range(lo1, hi1 + 1):
-            c1 = k1 % n1 if p1 else k1
-            for k0 in range(lo0, hi0 + 1):
-                c0 = k0 % n0 if p0 else k0
-                tile = dirr[(c0 >> tb) + t0 * ((c1 >> tb) + t1 * (k2 >> tb))] - 1
-                if tile < 0:
-                    continue
-                h = heads[tile * 64 + ((c0 & m) | ((c1 & m) << tb) | ((k2 & m) << (2 * tb)))] - 1
-                if h >= 0:
-                    li[top - nh] = h
-                    nh += 1
-    for cell in range(nh):
-        h = li[top - cell]
-        while h >= 0:
-            d0 = pts[h, 0] - c[0]
-            d1 = pts[h, 1] - c[1]
-            d2 = pts[h, 2] - c[2] if dim == 3 else 0.0
-            if p0:
-                if d0 > half:
-                    d0 -= size
-                elif d0 < -half:
-                    d0 += size
-            if p1:
-                if d1 > half:
-                    d1 -= size
-                elif d1 < -half:
-                    d1 += size
-            q = d0 * d0 + d1 * d1 + d2 * d2
-            if q < r2 and nl <= top - nh:
-                lx[nl] = c[0] + d0
-                ly[nl] = c[1] + d1
-                lz[nl] = c[2] + d2
-                li[nl] = h
-                nl += 1
-                near2 = min(near2, q)
-            h = nxt[h]
-    return nl, near2
-
 
 
 @jit
