@@ -36,6 +36,12 @@ costs no atomic increment and decrement. Measured with perf: 42% of a 2D
 off-lattice growth went to them. Such a kernel must allocate no array and
 keep none a callee returns: it would never be freed (``test_borrow`` counts
 numba's allocations across each growth kernel)."""
+owning = numba.njit(**_SETTINGS, _nrt=True)
+"""Decorator for a kernel that allocates and frees an array of its own and may be called from one that
+borrows. A ``jit`` kernel takes numba's reference counting from the caller it is first compiled for
+(numba inherits the flag), so called first from a borrowing kernel it would allocate without ever freeing:
+``offlattice.grid.map_dist``, compiled first by the single walker's Gaussian step, leaked its pyramid's level
+starts at every step of the lockstep walkers compiled after it (``test_borrow``)."""
 inline = numba.njit(**_SETTINGS, inline="always")
 """Decorator for small scalar helpers inlined at numba level. Measured: on the
 lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
@@ -54,12 +60,15 @@ def call_literal(kernel, first, *args):
     return kernel.compile(signature)(first, *args)
 
 
-def cached(kernel, first) -> bool:
+def cached(kernel, first, *more) -> bool:
     """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made)
-    for the literal first argument ``first`` (a kernel compiled apart for each, as the dimension).
+    for the literal first argument ``first`` (a kernel compiled apart for each, as the dimension)
+    and arguments of the types of ``more`` after it.
 
     Reads numba's own cache index, the one place this package looks inside numba."""
-    return any(getattr(key[0][0], "literal_value", None) == first for key in kernel._cache._cache_file._load_index())
+    types = tuple(numba.typeof(a) for a in more)
+    return any(getattr(key[0][0], "literal_value", None) == first and tuple(key[0][1:1 + len(types)]) == types
+               for key in kernel._cache._cache_file._load_index())
 
 
 # The growth kernels take a batch's generators as a Python list: numba's

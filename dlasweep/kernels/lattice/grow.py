@@ -52,7 +52,7 @@ from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
-from ..model import GRID_GROWTH, STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks_xo
+from ..model import GRID_GROWTH, STEPS_DTYPE, checkpoint, diffusion_time, grown, lockstep_flag, model_from, sticks_xo
 from ..walk import (
     below,
     direction,
@@ -325,7 +325,7 @@ def _distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap,
 
 
 @jit
-def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
+def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
     """Grow a lattice cluster of up to ``n`` particles.
 
     After the seed, one walker at a time is released on the launch circle
@@ -342,6 +342,8 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
         The model's dimension, a literal: each is compiled apart, its
         branches on ``dim`` folded away: 2D 1e6, six runs side by side on
         the two cores, 0.87 to 0.93 of the time; 3D 5e4, 0.97 to 1.03.
+    lockstep : None or True
+        ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
     n : int
     model : Model
         The model (``kernels.model.Model``).
@@ -386,7 +388,7 @@ def _grow(dimension, n, model, moves, marks, rng, points, steps, times, t_start,
     words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
     grid = (words, start, blocks, cells, field, width, off)
     passed = checkpoint(marks, times, 0, count, t0)
-    if model.walkers > 1:
+    if lockstep is not None:
         return _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, count, r_max, h_max, grid)
     stickiness, max_steps, jumps = model.stickiness, model.max_steps, model.jumps
     launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
@@ -704,16 +706,16 @@ def _lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps,
 
 
 @jit
-def _grow_each(dimension, n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds, t_start, t_cut,
-               t_alias, t_off):
+def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds,
+               t_start, t_cut, t_alias, t_off):
     """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays.
 
     ``dimension`` (the model's) is a literal: each is compiled apart, and only when used."""
     literally(dimension)
     for i in range(len(rngs)):
         start = clock()
-        counts[i], statuses[i] = _grow(dimension, n, model, moves, marks, rngs[i], points[i], steps[i], times[i],
-                                       t_start, t_cut, t_alias, t_off)
+        counts[i], statuses[i] = _grow(dimension, lockstep, n, model, moves, marks, rngs[i], points[i], steps[i],
+                                       times[i], t_start, t_cut, t_alias, t_off)
         seconds[i] = clock() - start
 
 
@@ -750,8 +752,8 @@ def grow_lattice(n, p, marks, rngs, times=None):
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
     moves = unit_moves(model.dim, moore)
-    call_literal(_grow_each, model.dim, n, model, moves, np.asarray(marks, np.int64), list(rngs), points, steps,
-                 times, counts, statuses, seconds, *exit_tables(model.dim, moore))
+    call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), n, model, moves, np.asarray(marks, np.int64),
+                 list(rngs), points, steps, times, counts, statuses, seconds, *exit_tables(model.dim, moore))
     nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
     period = model.size if model.seed_shape == codes.LINE else 0
     return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)
@@ -759,5 +761,6 @@ def grow_lattice(n, p, marks, rngs, times=None):
 
 
 def compiled(dim) -> bool:
-    """Whether numba's on-disk cache holds this growth kernel for ``dim`` (most of its compile time)."""
-    return cached(_grow_each, dim)
+    """Whether numba's on-disk cache holds this growth kernel, of one walker, for ``dim`` (most of its compile
+    time)."""
+    return cached(_grow_each, dim, lockstep_flag(1))

@@ -125,6 +125,8 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
     overlaps, the walker is put back along the step to where it first touches
     one of the particles it overlaps there (exact contact); should that spot
     overlap another particle, a full ray cast along the step decides.
+    ``e`` and ``u`` are scratch (3,): it allocates nothing, as numba compiles it
+    without reference counting when the first caller to need it borrows (``_jit.borrow``).
     """
     up = dim - 1
     for a in range(dim):
@@ -148,13 +150,12 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
         u[a] /= length
     t, hit = ray(w, u, length * (1.0 + 1e-9) + 1e-12, nov, lx, ly, lz, sub, dim)
     if hit != -1:
-        p = np.empty(3)
-        for a in range(3):
-            p[a] = w[a]
-        settle(p, u, t, hit, dim, lx, ly, lz, li, normal)
-        if gather(p, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0] == 0:
+        for a in range(3):  # e, done with, holds the contact tried
+            e[a] = w[a]
+        settle(e, u, t, hit, dim, lx, ly, lz, li, normal)
+        if gather(e, 1.0 - 1e-12, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0] == 0:
             for a in range(3):
-                w[a] = p[a]
+                w[a] = e[a]
             return True
     return cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li, normal)
 

@@ -17,7 +17,7 @@ maps, the cell list's directory and heads (``celllist``), and the field.
 
 import numpy as np
 
-from ..._jit import borrow, jit
+from ..._jit import borrow, jit, owning
 from .. import maps
 from ..centres import (
     CCAP,
@@ -253,7 +253,7 @@ NEAR = 2.0
 clear, every centre lies 2 or more away; set, the walker takes the neighbour list."""
 
 
-@jit
+@owning
 def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     """Lower bound on the centre distance from w to every particle, from the
     centre field and the maps.

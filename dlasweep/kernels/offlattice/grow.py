@@ -19,7 +19,7 @@ from ..._jit import borrow, cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..centres import FS, cell_centre, centre_bound, pyramid_ball
-from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, model_from, sticks
+from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, lockstep_flag, model_from, sticks
 from ..walk import ball_exit, return_to_plane, return_to_sphere, seed_stream, unit_vector, xdir
 from .celllist import INF, attachment_order, gather, insert, more_heads, sort_cells, sort_tail
 from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
@@ -443,13 +443,15 @@ def _index_late(i, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dir
 
 
 @jit
-def _grow(dimension, n, model, marks, rng, times):
+def _grow(dimension, lockstep, n, model, marks, rng, times):
     """Grow an off-lattice cluster of up to ``n`` particles.
 
     Parameters
     ----------
     dimension : int
         The model's dimension, a literal that ``_walk`` is compiled for.
+    lockstep : None or True
+        ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
     n : int
     model : Model
         The model (``kernels.model.Model``).
@@ -498,7 +500,7 @@ def _grow(dimension, n, model, marks, rng, times):
     old_gi, old_field = gi, field  # the grid's field, carried over when it is outgrown
     rs = seed_stream(rng)
     passed = checkpoint(marks, times, 0, count, t0)
-    if model.walkers > 1:
+    if lockstep is not None:
         count, status = _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, order, steps, parents, nxt, count,
                                   geo, (gi, gf, words, start, blocks, cells, dirr, heads, field))
         return pts, steps, parents, count, status
@@ -669,7 +671,7 @@ def _lockstep(n, model, marks, rng, rs, t0, times, passed, pts, order, steps, pa
 
 
 @jit
-def _grow_each(dimension, n, model, marks, rngs, times):
+def _grow_each(dimension, lockstep, n, model, marks, rngs, times):
     """``_grow`` with each generator of the list ``rngs`` in turn (row i of ``times``); its results and seconds.
 
     ``dimension`` (the model's) is a literal: each is compiled apart, and only when used."""
@@ -677,7 +679,7 @@ def _grow_each(dimension, n, model, marks, rngs, times):
     out = []
     for i in range(len(rngs)):
         start = clock()
-        pts, steps, parents, count, status = _grow(dimension, n, model, marks, rngs[i], times[i])
+        pts, steps, parents, count, status = _grow(dimension, lockstep, n, model, marks, rngs[i], times[i])
         out.append((pts, steps, parents, count, status, times[i], clock() - start))
     return out
 
@@ -691,10 +693,12 @@ def grow_offlattice(n, p, marks, rngs, times=None):
     """
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     model = model_from(p)
-    grown_each = call_literal(_grow_each, model.dim, int(n), model, np.asarray(marks, np.int64), list(rngs), times)
+    grown_each = call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), int(n), model,
+                              np.asarray(marks, np.int64), list(rngs), times)
     return [grown(*result) for result in grown_each]
 
 
 def compiled(dim) -> bool:
-    """Whether numba's on-disk cache holds this growth kernel for ``dim`` (most of its compile time)."""
-    return cached(_grow_each, dim)
+    """Whether numba's on-disk cache holds this growth kernel, of one walker, for ``dim`` (most of its compile
+    time)."""
+    return cached(_grow_each, dim, lockstep_flag(1))
