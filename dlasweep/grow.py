@@ -98,13 +98,14 @@ def rng_for(seed) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(seed))
 
 
-def compiled(model: str, dim: int) -> bool:
-    """Whether numba's cache holds ``model``'s growth kernel for ``dim`` (it takes most of the compile time).
+def compiled(model: str, dim: int, walkers: int = 1) -> bool:
+    """Whether numba's cache holds ``model``'s growth kernel for ``dim`` and ``walkers`` (it takes most of the
+    compile time; one walker and lockstep walkers are compiled apart, ``kernels.model.lockstep_flag``).
 
     Only this process's cache is looked at: the embedded cluster's too.
     """
     # The kernels name no entry kernel of their own yet: the one that takes most of the compile time.
-    return {"lattice": lattice.grow.compiled, "offlattice": offlattice.grow.compiled}[model](dim)
+    return {"lattice": lattice.grow.compiled, "offlattice": offlattice.grow.compiled}[model](dim, walkers)
 
 
 def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:

@@ -59,7 +59,7 @@ def _duration(seconds) -> str:
     return f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h"
 
 
-def growth_bar(n, model, dim):
+def growth_bar(n, model, dim, walkers=1):
     """A progress bar for ``grow`` on a terminal (particles, rate, time left), else ``nullcontext(None)``.
 
     Announces first that the kernels compile when numba's cache lacks them.
@@ -69,7 +69,7 @@ def growth_bar(n, model, dim):
         return contextlib.nullcontext()
     from .grow import compiled
 
-    if not compiled(model, dim):
+    if not compiled(model, dim, walkers):
         print("dlasweep grow: compiling kernels (once)", file=sys.stderr)
     from tqdm import tqdm
 

@@ -224,14 +224,16 @@ def _more_seeds(spec, n, half_width, failed):
 
 def _compiles(spec) -> bool:
     """Whether the first tasks compile kernels: numba's cache lacks a growth kernel the spec needs."""
-    return not all(compiled(model, dim) for model, dim in _first_task_of_each_kernel(spec))
+    kernels = _first_task_of_each_kernel(spec)
+    return not all(compiled(model, dim, 2 if lockstep else 1) for model, dim, lockstep in kernels)
 
 
 def _first_task_of_each_kernel(spec) -> dict:
-    """(model name, dimension) -> the first task of the spec that grows it: each is a kernel of its own."""
+    """(model name, dimension, lockstep walkers) -> the first task of the spec that grows it: each is a kernel of
+    its own."""
     first = {}
     for task in spec.tasks():
-        first.setdefault((task.params["model"], task.params["dim"]), task)
+        first.setdefault((task.params["model"], task.params["dim"], task.params["walkers"] > 1), task)
     return first
 
 

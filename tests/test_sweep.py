@@ -288,13 +288,16 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
 
 
 def test_each_model_and_dimension_swept_is_a_kernel_of_its_own():
-    """The kernels are compiled per dimension (``dlasweep._jit``): each (model, dim) swept is loaded
-    (``_load_kernels``) and looked up in the cache (``_compiles``) on its own."""
-    spec = parse_spec("name = 'dims'\n[grid]\nn_particles = [5]\nseeds = 2\n"
-                      "[model]\nmodel = ['lattice', 'offlattice']\ndim = [2, 3]\n")
+    """The kernels are compiled per dimension (``dlasweep._jit``) and apart for lockstep walkers
+    (``kernels.model.lockstep_flag``): each (model, dim, lockstep) swept is loaded (``_load_kernels``) and
+    looked up in the cache (``_compiles``) on its own."""
+    spec = parse_spec("name = 'dims'\n[grid]\nn_particles = [5]\nseeds = 2\nsize = [40]\n"
+                      "[model]\nmodel = ['lattice', 'offlattice']\ndim = [2, 3]\nwalkers = [1, 3, 5]\n")
     kernels = sweep._first_task_of_each_kernel(spec)
-    assert sorted(kernels) == [("lattice", 2), ("lattice", 3), ("offlattice", 2), ("offlattice", 3)]
-    assert all((task.params["model"], task.params["dim"]) == key for key, task in kernels.items())
+    assert sorted(kernels) == [(model, dim, lockstep) for model in ("lattice", "offlattice") for dim in (2, 3)
+                               for lockstep in (False, True)]
+    assert all((task.params["model"], task.params["dim"], task.params["walkers"] > 1) == key
+               for key, task in kernels.items())
 
 
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):

@@ -760,7 +760,7 @@ def grow_lattice(n, p, marks, rngs, times=None):
             for pts, st, count, *rest in zip(points, steps, counts, statuses, times, seconds)]
 
 
-def compiled(dim) -> bool:
-    """Whether numba's on-disk cache holds this growth kernel, of one walker, for ``dim`` (most of its compile
+def compiled(dim, walkers=1) -> bool:
+    """Whether numba's on-disk cache holds this growth kernel for ``dim`` and ``walkers`` (most of its compile
     time)."""
-    return cached(_grow_each, dim, lockstep_flag(1))
+    return cached(_grow_each, dim, lockstep_flag(walkers))
