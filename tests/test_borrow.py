@@ -20,6 +20,7 @@ CASES = [
     dict(model="offlattice", dim=2, seed_shape="line", size=200),
     dict(model="offlattice", dim=2, launch="box", size=400),
     dict(model="offlattice", dim=2, walkers=500, size=120),  # a walk a turn: 3000 walkers in 300 took 64 s
+    dict(model="lattice", dim=2, walkers=500, size=120),  # compiled apart from one walker's (``lockstep_flag``)
 ]
 
 SCRIPT = """
