@@ -98,13 +98,12 @@ def regrow(points, count, dim, width, off, period, old):
     cap, fcap = FIELD_CAP[dim], FCAP[dim - 2]
     o_levels = maps.pyramid_starts(dim, o_width, cap)
     levels = maps.pyramid_starts(dim, width, cap)
-    sides = np.zeros(len(levels) - 1, np.int64)  # cells a side of each level, the new grid's and the old's
-    o_sides = np.zeros(len(o_levels) - 1, np.int64)
-    for level in range(len(levels) - 1):
+    sides = np.zeros(2, np.int64)  # cells a side of the field and the first level, the new grid's and the old's
+    o_sides = np.zeros(2, np.int64)
+    for level in range(2):
         s = maps.FIELD_SHIFT + step * level
         sides[level] = (width + (1 << s) - 1) >> s
-        if level < len(o_sides):
-            o_sides[level] = (o_width + (1 << s) - 1) >> s
+        o_sides[level] = (o_width + (1 << s) - 1) >> s
     carried = period == 0 and shift > 0 and shift % max(2 * block, 1 << (maps.FIELD_SHIFT + step)) == 0 \
         and len(o_levels) > 2 and len(levels) > 2
     if carried:
