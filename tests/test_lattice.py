@@ -20,7 +20,7 @@ from dlasweep.kernels.lattice.exits import (
     unit_moves,
 )
 from dlasweep.kernels.walk import seed_stream
-from dlasweep.kernels.lattice.grow import _distance_bound, _release
+from dlasweep.kernels.lattice.walker import distance_bound, release
 from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild, regrow
 from dlasweep.kernels.model import GRID_GROWTH
 
@@ -289,7 +289,7 @@ def test_a_filled_field_skips_only_tiles_beyond_reach(dim):
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("where", ["circle", "plane", "box", "box above a plane"])
 def test_release_puts_walkers_uniformly_where_they_start(dim, where):
-    """4000 walkers released with ``_release``: on the launch circle
+    """4000 walkers released with ``release``: on the launch circle
     (sphere), at the launch height above a substrate, on the box's surface
     (a substrate's box: its top), uniformly there: per axis the mean and
     the mean square of a uniform law (within about 5 standard errors), and
@@ -300,7 +300,7 @@ def test_release_puts_walkers_uniformly_where_they_start(dim, where):
     box_lo, box_hi = (0, size - 1) if line else (-(size // 2), size - 1 - size // 2)
     pos = np.zeros((4000, 3))
     for p in pos:
-        _release(rng, dim, line, box, size, box_lo, box_hi, launch_r, p)
+        release(rng, dim, line, box, size, box_lo, box_hi, launch_r, p)
     assert (pos[:, dim:] == 0).all()
     x = pos[:, :dim]
     up = dim - 1
@@ -327,7 +327,7 @@ def test_release_puts_walkers_uniformly_where_they_start(dim, where):
 
 @pytest.mark.parametrize("dim, width", [(2, 512), (3, 96)])
 def test_distance_bound_is_zero_near_the_cluster_and_a_lower_bound_beyond(dim, width):
-    """``_distance_bound`` (which ``_grow`` spells out) on random clusters,
+    """``distance_bound`` (which ``_grow`` spells out) on random clusters,
     against the brute-force distances to the nearest particle: Chebyshev 0
     within two sites (and only within three, the level-1 cells' reach), else
     at least 3 and at most the truth, exact up to 4 sites (the words), 5 off
@@ -356,11 +356,11 @@ def test_distance_bound_is_zero_near_the_cluster_and_a_lower_bound_beyond(dim, w
     for q in np.rint(points[rng.integers(0, len(points), 3000)] + rng.normal(0, 1, (3000, dim)) * scale[:, None]):
         truth = np.abs(points - q).max(1).min()
         ijk = [int(x) + off for x in q] + [off] * (3 - dim)
-        d, far = _distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
-                                 False)
+        d, far = distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
+                                False)
         # a walker from a far jump reads the pyramid first: the same bounds
-        assert _distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
-                               True) == (d, far), q
+        assert distance_bound(words, field, levels, dim, width, blocks[0], start[1], blocks[1], fw0, cap, *ijk,
+                              True) == (d, far), q
         if not all(0 <= x < width for x in ijk):
             assert d == 5 and far == 0
             seen.add("off the grid")

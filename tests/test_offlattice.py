@@ -405,9 +405,9 @@ def _found(pts, nxt, i, grid):
 def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     """A grid built with no room reserved gives its heads more room as tiles
     fill (``celllist.more_heads``), and a particle attached when they are full
-    waits (``HEADS_FULL``) and is put in by ``_index_late``: each is then
+    waits (``HEADS_FULL``) and is put in by ``index_late``: each is then
     found where it is."""
-    from dlasweep.kernels.offlattice import geometry, grid as ol, grow
+    from dlasweep.kernels.offlattice import geometry, grid as ol, walker
     rng = np.random.default_rng(5)
     n = 4000
     pts = np.zeros((n + 1, 2))
@@ -422,10 +422,10 @@ def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     geo = np.array([1500.0 * np.sqrt(2), 1500.0, -1.0])
     far = np.array([1550.0, 1550.0, 0.0])
     steps, parents = np.zeros(n + 1, np.uint32), np.zeros(n + 1, np.int32)
-    count, code = grow._attach(far, 0, n, 5, pts, np.zeros(0, np.int32), steps, parents, nxt, geo, 2, False, 0, gi, gf,
-                               words, start, blocks, cellz, dirr, heads, field)
-    assert (count, code) == (n + 1, grow.HEADS_FULL)
-    heads = grow._index_late(n, pts, nxt, 2, 0, gi, gf, words, start, blocks, cellz, dirr, heads, field)
+    count, code = walker.attach(far, 0, n, 5, pts, np.zeros(0, np.int32), steps, parents, nxt, geo, 2, False, 0, gi,
+                                gf, words, start, blocks, cellz, dirr, heads, field)
+    assert (count, code) == (n + 1, walker.HEADS_FULL)
+    heads = walker.index_late(n, pts, nxt, 2, 0, gi, gf, words, start, blocks, cellz, dirr, heads, field)
     grid = gi, gf, words, start, blocks, cellz, dirr, heads, field
     assert _found(pts, nxt, n, grid) and all(_found(pts, nxt, i, grid) for i in range(0, n, 7))
 

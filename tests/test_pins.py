@@ -16,11 +16,12 @@ import pytest
 
 from dlasweep.kernels import maps
 from dlasweep.kernels.lattice import grow as lattice_grow
+from dlasweep.kernels.lattice import walker as lattice_walker
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.words import rebuild
 from dlasweep.kernels.model import sticks_xo
 from dlasweep.kernels.offlattice import grid
-from dlasweep.kernels.offlattice import grow as offlattice_grow
+from dlasweep.kernels.offlattice import walker as offlattice_walker
 
 
 def body(function):
@@ -59,12 +60,12 @@ def copy(function, name):
 def test_the_walks_two_jumps_are_one_text():
     """The off-lattice walk's walk-on-spheres jump, spelled out for the
     exact end game and again for Gaussian steps."""
-    first, second = copies(offlattice_grow._walk, "jump")
+    first, second = copies(offlattice_walker.walk_to_contact, "jump")
     assert first == second and len(first) == 6
 
 
 def test_the_walks_map_bound_is_walk_bound_spelled_out():
-    assert copy(offlattice_grow._walk, "walk_bound") == body(grid.walk_bound)
+    assert copy(offlattice_walker.walk_to_contact, "walk_bound") == body(grid.walk_bound)
 
 
 def _clustered(rng, dim, line, size, n):
@@ -126,12 +127,12 @@ def test_walk_bound_is_map_dist(dim, line):
 
 
 def test_the_lattice_walks_single_step_is_touches_and_step_to_spelled_out():
-    assert copy(lattice_grow._grow, "touches") == body(lattice_grow.touches)
-    assert copy(lattice_grow._grow, "step_to") == body(lattice_grow.step_to)
+    assert copy(lattice_grow._grow, "touches") == body(lattice_walker.touches)
+    assert copy(lattice_grow._grow, "step_to") == body(lattice_walker.step_to)
 
 
 def test_the_lattice_walks_distance_bound_is_distance_bound_spelled_out():
-    assert copy(lattice_grow._grow, "_distance_bound") == body(lattice_grow._distance_bound)
+    assert copy(lattice_grow._grow, "distance_bound") == body(lattice_walker.distance_bound)
 
 
 @pytest.mark.parametrize("dim, moore, line", [(2, False, False), (2, True, False), (3, False, False),
@@ -139,7 +140,7 @@ def test_the_lattice_walks_distance_bound_is_distance_bound_spelled_out():
 def test_touches_and_step_to_are_near_step(dim, moore, line):
     """The single walker's step as ``_grow`` spells it out (``touches``,
     the sticking rule, ``step_to``: the stream in registers) sticks and
-    moves as ``_near_step`` does from the same sites and stream states, on
+    moves as ``near_step`` does from the same sites and stream states, on
     random clusters, where the walk takes it: near the cluster or the
     substrate."""
     rng = np.random.default_rng(5 + dim + 10 * moore + 100 * line)
@@ -177,16 +178,16 @@ def test_touches_and_step_to_are_near_step(dim, moore, line):
         tried += 1
         stickiness = (1.0, 0.4)[tried % 2]
         want_q, want_rs = q.copy(), stream.copy()
-        want = lattice_grow._near_step(words, dim, start, blocks, width, off, want_q, moves, period, stickiness,
-                                       want_rs, near)
+        want = lattice_walker.near_step(words, dim, start, blocks, width, off, want_q, moves, period, stickiness,
+                                          want_rs, near)
         pos = q.astype(np.float64)
         got_rs = tuple(stream)
-        got = lattice_grow.touches(words, dim, blocks[0], width, off, q, moves, nm, line, period)
+        got = lattice_walker.touches(words, dim, blocks[0], width, off, q, moves, nm, line, period)
         if got:
             got, *got_rs = sticks_xo(stickiness, *got_rs)
             got_rs = np.array(got_rs, np.uint64)  # numba returns Python ints, which it would type by value
         if not got:
-            got_rs = lattice_grow.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period, *got_rs)
+            got_rs = lattice_walker.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period, *got_rs)
         assert got == want
         np.testing.assert_array_equal(pos, want_q)
         np.testing.assert_array_equal(np.array(got_rs, np.uint64), want_rs)

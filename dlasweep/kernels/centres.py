@@ -1,6 +1,6 @@
 """The centre field and the centre pyramid: distances from cells' centres to
 the nearest particle, which bound a walker's distance to the cluster from
-below (``offlattice.grid.map_dist``, ``lattice.grow._distance_bound``).
+below (``offlattice.grid.map_dist``, ``lattice.walker.distance_bound``).
 
 Level 0 is the kernel's own field. Off-lattice it is the centre field, a
 byte per coarse cell of side ``2**FS``: the distance from its centre to the

@@ -4,8 +4,11 @@
   (cube), tabulated as alias tables by symmetry class;
 - ``words``: the bit-packed occupancy of the sites, and exact Chebyshev
   distances a few sites out from whole 64-bit words;
-- ``grow``: the walk from release to contact, attachment, the lockstep
-  walkers, and ``grow_lattice``, the entry point;
+- ``walker``: the pieces of one walker's walk (single steps, contact, the
+  distance bounds, release) and the attachment of a particle;
+- ``lockstep``: many walkers at once;
+- ``grow``: the walk from release to contact, and ``grow_lattice``, the entry
+  point;
 - ``parents``: who stuck to whom, found from the sites after growth.
 """
 

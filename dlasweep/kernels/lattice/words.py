@@ -13,7 +13,7 @@ carried over into a larger one (``regrow``).
 
 import numpy as np
 
-from ..._jit import borrow, jit
+from ..._jit import jit
 from .. import maps
 from ..centres import FCAP, level_lower, levels_from_held, pyramid_lower
 

@@ -8,8 +8,11 @@ Two particles touch when their centres are exactly one diameter apart.
   the free distance of a walker from below, built and regrown with the cell list;
 - ``contact``: the exact ray cast to contact, the Gaussian steps and the
   rebound of a walker that did not stick;
-- ``grow``: the walk from release to contact, attachment, the lockstep
-  walkers, and ``grow_offlattice``, the entry point.
+- ``walker``: one walker's release, its walk from release to contact, and
+  the attachment of the particle it becomes;
+- ``lockstep``: many walkers at once;
+- ``grow``: the growth of a cluster from those, and ``grow_offlattice``, the
+  entry point.
 
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
 uniformly onto the sphere whose radius is a lower bound on its free

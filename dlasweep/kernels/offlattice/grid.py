@@ -267,7 +267,7 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     distance to its level-s cell's faces. Returns 0 when the level-1 cell is
     set (look closer), -1 off the map. At the field's cap, away from periodic
     sides, the centre pyramid above the field bounds instead of the maps
-    (``pyramid_dist``). (``_walk`` spells this out inline.)
+    (``pyramid_dist``). (``walker.walk_to_contact`` spells this out inline.)
     """
     W = gi[MAP_WIDTH]
     x0 = w[0]
@@ -339,7 +339,7 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     """``map_dist`` as the walk's hot loop computes it: the grid's constants
     from ``walk_geometry``, and w's periodic coordinates wrapped in place.
 
-    ``grow._walk`` holds a copy of this body, spelled out (a call would cost
+    ``walker.walk_to_contact`` holds a copy of this body, spelled out (a call would cost
     reference counting, and numba's inlining cost as much).
 
     With ``far`` (the walker comes from far) it reads the centre pyramid first, and the
