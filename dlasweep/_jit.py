@@ -41,7 +41,8 @@ owning = numba.njit(**_SETTINGS, _nrt=True)
 borrows. A ``jit`` kernel takes numba's reference counting from the caller it is first compiled for
 (numba inherits the flag), so called first from a borrowing kernel it would allocate without ever freeing:
 ``offlattice.grid.map_dist``, compiled first by the single walker's Gaussian step, leaked its pyramid's level
-starts at every step of the lockstep walkers compiled after it (``test_borrow``)."""
+starts at every step of the lockstep walkers compiled after it (``test_borrow`` counts the allocations, and
+follows every borrowing kernel's calls to find such a helper)."""
 inline = numba.njit(**_SETTINGS, inline="always")
 """Decorator for small scalar helpers inlined at numba level. Measured: on the
 lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
