@@ -21,7 +21,7 @@ import xarray as xr
 
 from . import store
 from .host import READS, latency_line, read_latency
-from .schema import Variable
+from .schema import Variable, plain
 
 MIB = "2^20 byte"
 """The units of memory sizes (MiB, which udunits does not know)."""
@@ -125,7 +125,7 @@ def probe(params: dict, n: int, seed: int = 1) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=print) -> xr.Dataset:
+def run_bench(full: bool = False, quick: bool = False, huge: bool = False, models=None, echo=print) -> xr.Dataset:
     """Time every model at several N; return the measurements as a Dataset.
 
     Parameters
@@ -137,17 +137,21 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
         Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     quick : bool
         Only the smallest N of each model (a smoke test).
+    models : list of str, optional
+        Only these of ``MODELS`` (default: all); the naive walk runs beside lattice-2d.
     echo : callable
         Receives one line per measurement as it finishes.
     """
     full = full or huge
+    models = list(MODELS) if models is None else list(dict.fromkeys(models))
     plan = []
-    for name, params in MODELS.items():
+    for name in models:
+        params = MODELS[name]
         counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
         counts += [HUGE_COUNT] if huge and "2d" in name else []
         counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
         plan += [(name, "exact", params, n) for n in counts]
-    naive_counts = [QUICK_COUNT // 4] if quick else NAIVE_COUNTS
+    naive_counts = ([QUICK_COUNT // 4] if quick else NAIVE_COUNTS) if "lattice-2d" in models else []
     for n in naive_counts:
         plan.append(("lattice-2d", "exact", MODELS["lattice-2d"], n))
         plan.append(("lattice-2d", "naive", {**MODELS["lattice-2d"], **NAIVE}, n))
@@ -179,7 +183,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, echo=
     ds = _to_dataset(rows)
     for name, figures in ends.items():
         ds.attrs.update({f"end_to_end_{name.replace('-', '_')}_{key}": value for key, value in figures.items()})
-    for name in MODELS:
+    for name in models:
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
         fitted = cost_exponent(exact)
         if fitted is not None:
@@ -253,7 +257,10 @@ def target_table(ds: xr.Dataset) -> list[str]:
             f"cost exponent {power_label(lo)} to {power_label(hi)}",
             f"steps/particle {power_label(hi)} over {power_label(lo)}"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    benched = {str(plain(v)) for v in ds.model.values}
     for name, target in TARGETS.items():
+        if name not in benched:
+            continue
         exact = ds.where((ds.model == name) & (ds.method == "exact"), drop=True)
         row = [name]
 

@@ -27,6 +27,7 @@ from . import plan as _plan
 from . import info, ragged, slurm, store
 from ._entry import command_of
 from ._version import __version__
+from .bench import MODELS as BENCH_MODELS
 from .grow import grow
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
 from .progress import follow, growth_bar, steps_bar
@@ -169,6 +170,8 @@ def _parser() -> argparse.ArgumentParser:
                       help="add N = 1e7 for every model and print the table of issue 25's targets")
     size.add_argument("--huge", action="store_true", help="--full, and N = 1e8 for the 2D models (hours)")
     size.add_argument("--quick", action="store_true", help="only the smallest N (a smoke test)")
+    timing.add_argument("--model", action="append", choices=list(BENCH_MODELS), metavar="MODEL",
+                        help=f"only this model (repeat for more): {', '.join(BENCH_MODELS)}; default every one")
     timing.set_defaults(handler=_bench)
     return parser
 
@@ -437,7 +440,7 @@ def _bench(args) -> int:
         print(line, flush=True)
         lines.append(line)
 
-    ds = run_bench(full=args.full, quick=args.quick, huge=args.huge, echo=echo)
+    ds = run_bench(full=args.full, quick=args.quick, huge=args.huge, models=args.model, echo=echo)
     if not args.quick:
         ds.attrs.update({f"analysis_{k}": v for k, v in analysis_bench(echo=echo).items()})
     out.mkdir(parents=True, exist_ok=True)

@@ -64,6 +64,7 @@ def test_target_table_compares_each_figure_with_its_target():
     assert table["offlattice-3d"][1] == "250.0 (<= 300: met)"
     assert table["offlattice-3d"][3] == "31.5 (<= 52: met)"
     assert table["offlattice-3d"][5:] == ["", ""]  # no 1e5 run: no exponent, no growth
+    assert set(table) == {"lattice-2d", "offlattice-3d"}  # a model not benched has no row
 
 
 def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
@@ -150,6 +151,40 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
         assert float(row.seconds[0]) == times[len(times) // 2]
         assert any(line.startswith(f"{name}: {lo} again after the rest, 6 runs") for line in lines), name
         assert ds.attrs[bench.exponent_attribute(name, "low")] < ds.attrs[bench.exponent_attribute(name, "high")]
+
+
+def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
+    from dlasweep import bench
+
+    calls = []
+
+    def fake_probe(params, n, seed=1):
+        calls.append((params["model"], params["dim"], params.get("jumps", True), n))
+        return {"seconds": 1e-6 * n, "n_grown": n, "steps": 10 * n, "status": "ok", "peak_mb": 200.0,
+                "added_mb": 1.0}
+
+    monkeypatch.setattr(bench, "probe", fake_probe)
+    monkeypatch.setattr(bench, "read_latency", lambda reads: {1.0: 10.0})
+    lines = []
+    ds = bench.run_bench(full=True, models=["lattice-3d"], echo=lines.append)
+    assert {call[:3] for call in calls} == {("lattice", 3, True)}
+    assert set(ds.model.values) == {"lattice-3d"} and set(ds.method.values) == {"exact"}
+    assert [line.split(" |")[0] for line in lines if line.startswith("| ")][1:] == ["| lattice-3d"]
+    # the naive walk comes with lattice-2d; a model named twice runs once
+    calls.clear()
+    ds = bench.run_bench(quick=True, models=["lattice-2d", "lattice-2d"], echo=lines.append)
+    assert sorted(calls) == [("lattice", 2, False, bench.QUICK_COUNT // 4), ("lattice", 2, True, bench.QUICK_COUNT // 4),
+                             ("lattice", 2, True, bench.QUICK_COUNT)]
+    # from the command line, and a model it does not know: one line that names it, status 2, nothing written
+    out = tmp_path / "bench"
+    assert main(["bench", "--quick", "--model", "offlattice-2d", "--model", "lattice-3d", "-o", str(out)]) == 0
+    with xr.open_dataset(out / "bench.nc") as ds:
+        assert sorted(ds.model.values) == ["lattice-3d", "offlattice-2d"]
+    capsys.readouterr()
+    assert main(["bench", "--quick", "--model", "lattice-4d", "-o", str(tmp_path / "never")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "'lattice-4d'" in err
+    assert not (tmp_path / "never").exists()
 
 
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():
