@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench import SCALING, exponent_attribute, power_label
-from .schema import plain
+from .bench_targets import SCALING, exponent_attribute, power_label
 from .figures import colour_of, new_figure, save_figure
+from .schema import plain
 
 
 def plot_bench(ds, outdir) -> Path:
@@ -23,7 +23,7 @@ def plot_bench(ds, outdir) -> Path:
     ds : xarray.Dataset
         As from ``dlasweep.bench.run_bench``: dimension ``run``, coordinates
         ``model``, ``method`` (``exact`` or ``naive``) and ``n``, variable
-        ``seconds``, attributes ``bench.exponent_attribute(<model>)``.
+        ``seconds``, attributes ``bench_targets.exponent_attribute(<model>)``.
     outdir : str or Path
         Created when missing.
 

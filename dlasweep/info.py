@@ -10,7 +10,7 @@ import numpy as np
 
 from . import params, ragged, schema
 from .analysis import summarise
-from .bench import exponent_attribute
+from .bench_targets import exponent_attribute
 from .config import LEVEL
 from .fit import fit_mass_radius
 from .host import latency_line

@@ -42,7 +42,8 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
 
 
 def test_target_table_compares_each_figure_with_its_target():
-    from dlasweep.bench import _to_dataset, _verdict, target_table
+    from dlasweep.bench import _to_dataset
+    from dlasweep.bench_targets import target_table, verdict
 
     # time as N^1.2, steps per particle 10, 12, 14.4, 2**20 bytes per 1e5 particles added
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
@@ -60,7 +61,7 @@ def test_target_table_compares_each_figure_with_its_target():
     assert lattice[3] == "10.5 (<= 24: met)"
     assert lattice[5] == "1.20 [1.20, 1.20] (<= 1.06: 13% over)"  # one run each: no range
     assert lattice[6] == "1.44 (<= 1.4: 3% over)"
-    assert _verdict(130.6, 130) == " (<= 130: 0.5% over)" and _verdict(130, 130) == " (<= 130: met)"
+    assert verdict(130.6, 130) == " (<= 130: 0.5% over)" and verdict(130, 130) == " (<= 130: met)"
     assert table["offlattice-3d"][1] == "250.0 (<= 300: met)"
     assert table["offlattice-3d"][3] == "31.5 (<= 52: met)"
     assert table["offlattice-3d"][5:] == ["", ""]  # no 1e5 run: no exponent, no growth
@@ -70,7 +71,8 @@ def test_target_table_compares_each_figure_with_its_target():
 def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
     # one fit for the table, the file's attribute, the printed line and the chart: runs below 1e5 (here
     # 1e3 and 1e4, at a tenth of the time the N^1.2 law gives) would pull an all-N fit to 1.25
-    from dlasweep.bench import _to_dataset, cost_exponent, target_table
+    from dlasweep.bench import _to_dataset
+    from dlasweep.bench_targets import cost_exponent, target_table
 
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2 * (0.1 if n < 10**5 else 1),
              "n_grown": n, "steps": 10 * n, "status": "ok", "peak_mb": 200.0, "added_mb": 1.0}
@@ -85,7 +87,8 @@ def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
 def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
     # steps a particle as N^0.05 (with noise a log-log fit must carry through) and the whole time as
     # N^1.2: the parts are 0.05 and 0.15 where the fit is exact, and add up to the slope less one always
-    from dlasweep.bench import _exponent_line, _to_dataset, cost_exponent, exponent_parts
+    from dlasweep.bench import _exponent_line, _to_dataset
+    from dlasweep.bench_targets import cost_exponent, exponent_parts
 
     def rows(wobble):
         return [{"model": "offlattice-3d", "method": "exact", "n": n, "seconds": 3e-6 * n**1.2 * w,
@@ -106,7 +109,8 @@ def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
 def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
     # time as N^1.2; the runs of 1e5 from 0.9 to 1.1 of it, of 1e6 from 0.8 to 1.25 (its weight in the
     # fit of 1e5, 1e6 and 1e7 is zero), one run of 1e7: the range is the slopes through 1e5's ends
-    from dlasweep.bench import _to_dataset, cost_exponent, cost_exponent_range, target_table
+    from dlasweep.bench import _to_dataset
+    from dlasweep.bench_targets import cost_exponent, cost_exponent_range, target_table
 
     spread = {10**5: (0.9, 1.1), 10**6: (0.8, 1.25), 10**7: (1.0, 1.0)}
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
@@ -125,7 +129,7 @@ def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
 def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeypatch):
     # every probe a little slower than the one before (a host that slows down): 1e5's six runs,
     # three before 1e7 and three after, span the drift, and the median is one of them
-    from dlasweep import bench
+    from dlasweep import bench, bench_targets
 
     calls = []
 
@@ -138,7 +142,7 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
     monkeypatch.setattr(bench, "read_latency", lambda reads: {1.0: 10.0})  # its own test: tests/test_host.py
     lines = []
     ds = bench.run_bench(full=True, echo=lines.append)
-    lo, hi = bench.SCALING
+    lo, hi = bench_targets.SCALING
     for name, params in bench.MODELS.items():
         mine = [i for i, call in enumerate(calls) if call[:2] == (params["model"], params["dim"])]
         firsts = [i for i in mine if calls[i][2] == lo]
@@ -150,7 +154,8 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
         assert float(row.seconds_low[0]) == times[0] and float(row.seconds_high[0]) == times[-1]
         assert float(row.seconds[0]) == times[len(times) // 2]
         assert any(line.startswith(f"{name}: {lo} again after the rest, 6 runs") for line in lines), name
-        assert ds.attrs[bench.exponent_attribute(name, "low")] < ds.attrs[bench.exponent_attribute(name, "high")]
+        low, high = (bench_targets.exponent_attribute(name, end) for end in ("low", "high"))
+        assert ds.attrs[low] < ds.attrs[high]
 
 
 def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
@@ -173,8 +178,8 @@ def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
     # the naive walk comes with lattice-2d; a model named twice runs once
     calls.clear()
     ds = bench.run_bench(quick=True, models=["lattice-2d", "lattice-2d"], echo=lines.append)
-    assert sorted(calls) == [("lattice", 2, False, bench.QUICK_COUNT // 4), ("lattice", 2, True, bench.QUICK_COUNT // 4),
-                             ("lattice", 2, True, bench.QUICK_COUNT)]
+    quick = bench.QUICK_COUNT
+    assert sorted(calls) == [("lattice", 2, False, quick // 4), ("lattice", 2, True, quick // 4), ("lattice", 2, True, quick)]
     # from the command line, and a model it does not know: one line that names it, status 2, nothing written
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "--model", "offlattice-2d", "--model", "lattice-3d", "-o", str(out)]) == 0

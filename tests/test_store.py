@@ -271,7 +271,7 @@ def test_bench_files_are_cf_clean_and_info_describes_them(cf_tables, cfchecks, t
     lines = run_cli("info", path)[1].splitlines()
     assert lines[2] == "runs: 6 (exact 5, naive 1)"
     assert lines[3].split() == ["model", "N", "(exact)", "largest", "seconds", "peak", "MiB", "time", "~", "N^"]
-    # no cost exponent: it is fitted over N from 1e5 (bench.cost_exponent), and a quick bench runs 2000
+    # no cost exponent: it is fitted over N from 1e5 (bench_targets.cost_exponent), and a quick bench runs 2000
     assert lines[4].split() == ["lattice-2d", "500,", "2000", "2000", "0.002", "120"]
     assert lines[-2] == "naive walk / exact jumps, time: N=500 4.0x"
     assert lines[-1].startswith("host memory, ns a read waiting on the last: 0.25 MiB ")  # bench.run_bench's probe

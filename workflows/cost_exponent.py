@@ -14,7 +14,7 @@ swap the cores. Both sides time CPU seconds of ``grow`` after a warm-up
 
 and its steps' part the same with the mean steps a particle. It writes
 ``cost_exponent.csv`` (a row per round and model, as each ends) and ``cost_exponent.md``
-(each round's exponent, their mean and ``dlasweep.bench.TARGETS``'
+(each round's exponent, their mean and ``dlasweep.bench_targets.TARGETS``'
 target, and the host's memory before and after the rounds, ``dlasweep.host``)
 into the output folder. Needs two cores (Linux: it pins the sides).
 """
@@ -32,7 +32,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from dlasweep.bench import MODELS, SCALING, TARGETS
+from dlasweep.bench import MODELS
+from dlasweep.bench_targets import SCALING, TARGETS
 from dlasweep.host import latency_line, read_latency
 
 _SIDE = """
