@@ -14,10 +14,17 @@ import functools
 
 import numpy as np
 
-from ._jit import inline, jit
-
-_HALF = 0.5
-"""Half-width of a particle: a lattice site is a unit cell, a disk/sphere has unit diameter."""
+from ._jit import jit
+from .box_bitmaps import (
+    HALF,
+    coarsen,
+    least_count,
+    mark_boxes,
+    mark_sites,
+    nth_piece,
+    ordered,
+    pieces,
+)
 
 
 def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
@@ -58,7 +65,7 @@ alone is counted in bands of its rows."""
 
 _PIECE_BYTES = 1 << 29
 """Most bytes (512 MiB) of a prefix's shifted, first-axis ordered copy that the marking takes at a time
-(``_pieces``); a larger prefix is marked in pieces, each copied anew from the prefix for each marking.
+(``pieces``); a larger prefix is marked in pieces, each copied anew from the prefix for each marking.
 Measured on 9e7 sites (a 1e7 cluster, each site made 3 x 3), box counting in CPU s: one piece 119,
 pieces of 16 Mi particles 168; beside each other, one piece 117.6, two of 512 MiB 146.0. Filling a
 piece takes a pass over the whole prefix."""
@@ -78,302 +85,13 @@ a grid too large for a bitmap, in bands of its rows, a pass each; a sparse set's
 than ``_BANDS_MOST`` bands, its boxes sorted."""
 ONE_BOX, HALVED, STRIPS, ONE_PASS, PASSES, SORTED, BANDS = range(len(ROUTES))
 
-_EVEN = np.uint64(0x5555555555555555)
-"""The even bits of a word."""
-
-_TOP = np.uint64(63)
-"""Shift that brings a word's top bit to the bottom."""
-
-
-_CACHED_BYTES = 1 << 18
-"""Unit-box bitmaps up to this size stay in a core's cache however the particles visit them: below it they
-are marked in attachment order, above it in first-axis order (``_ordered``)."""
-
-
-@jit
-def _ordered(points, high):
-    """Whether to mark ``points`` (from the low corner, up to ``high``) in first-axis order.
-
-    In that order the bits a particle sets lie in rows near the previous
-    particle's, so the bitmaps are read from cache, not memory; a set whose
-    bitmaps are small is not worth the sort (it took 5% of the measurement
-    of a cluster of 10^3).
-    """
-    rows = 1
-    for a in range(len(high) - 1):
-        rows *= np.int64(high[a]) + 1
-    unit_bytes = 8 * rows * (np.int64(high[-1]) // 64 + 1)
-    return high[0] <= max(len(points), 1 << 22) and unit_bytes > _CACHED_BYTES
-
-
-@jit
-def _pieces(prefix, low, top, ordered, most):
-    """How ``_count_prefix`` hands a prefix, shifted by ``low``, to the marking: in pieces of at most
-    ``most`` particles (more only where one integer first coordinate holds more).
-
-    In first-axis order (``ordered``) a piece is the particles of a range of
-    integer first coordinates, sorted by it (a stable counting sort up to
-    ``top``), and ``_piece`` fills it anew for each marking; otherwise one
-    piece, the whole prefix. One piece is filled here, once. A copy of a
-    1e8 cluster would outweigh what its growth left free.
-
-    Returns
-    -------
-    cuts : int64 (K + 1,), the pieces' first coordinates (ordered) or [0, 1]
-    start : int64, where each first coordinate's particles start in order (empty when not ordered)
-    buffer : the one piece, or room for the largest
-    """
-    n, dim = prefix.shape
-    if not ordered:
-        buffer = np.empty_like(prefix)
-        for i in range(n):
-            for a in range(dim):
-                buffer[i, a] = prefix[i, a] - low[a]
-        return np.array([0, 1], np.int64), np.empty(0, np.int64), buffer
-    start = np.zeros(top + 2, np.int64)
-    for i in range(n):
-        start[np.int64(np.floor(prefix[i, 0] - low[0])) + 1] += 1
-    for c in range(1, top + 2):
-        start[c] += start[c - 1]
-    cuts = [0]
-    largest = 0
-    for x in range(1, top + 1):
-        if start[x] > start[cuts[-1]] and start[x + 1] - start[cuts[-1]] > most:
-            largest = max(largest, start[x] - start[cuts[-1]])
-            cuts.append(x)
-    largest = max(largest, n - start[cuts[-1]])
-    cuts.append(top + 1)
-    buffer = np.empty((largest, dim), prefix.dtype)
-    if len(cuts) == 2:
-        _fill_piece(prefix, low, start, 0, top + 1, buffer)
-    return np.array(cuts, np.int64), start, buffer
-
-
-@jit
-def _piece(prefix, low, start, cuts, c, buffer):
-    """Piece ``c`` of ``_pieces``: the one piece it filled, or piece c filled into ``buffer``."""
-    if len(cuts) == 2:
-        return buffer
-    return _fill_piece(prefix, low, start, cuts[c], cuts[c + 1], buffer)
-
-
-@jit
-def _fill_piece(prefix, low, start, x0, x1, buffer):
-    """The particles of ``prefix`` whose integer first coordinate (shifted by ``low``) is in [x0, x1),
-    shifted, in first-axis order (stable), into the start of ``buffer``; that part."""
-    at = start[x0:x1 + 1] - start[x0]
-    for i in range(len(prefix)):
-        x = np.int64(np.floor(prefix[i, 0] - low[0]))
-        if x0 <= x < x1:
-            for a in range(prefix.shape[1]):
-                buffer[at[x - x0], a] = prefix[i, a] - low[a]
-            at[x - x0] += 1
-    return buffer[:start[x1] - start[x0]]
-
-
-@inline
-def _pairs(word):
-    """Halve a word: bit k (k < 32) of the result is set when bit 2k or 2k + 1 of ``word`` is."""
-    x = (word | (word >> np.uint64(1))) & _EVEN
-    x = (x | (x >> np.uint64(1))) & np.uint64(0x3333333333333333)
-    x = (x | (x >> np.uint64(2))) & np.uint64(0x0F0F0F0F0F0F0F0F)
-    x = (x | (x >> np.uint64(4))) & np.uint64(0x00FF00FF00FF00FF)
-    x = (x | (x >> np.uint64(8))) & np.uint64(0x0000FFFF0000FFFF)
-    return (x | (x >> np.uint64(16))) & np.uint64(0x00000000FFFFFFFF)
-
-
-@inline
-def _ones(word):
-    """Number of set bits."""
-    x = word - ((word >> np.uint64(1)) & _EVEN)
-    x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
-    x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
-    return np.int64((x * np.uint64(0x0101010101010101)) >> np.uint64(56))
-
-
-@jit
-def _mark_sites(points, offsets, scale, cells, strips):
-    """Put integer sites in their boxes on the last axis: bit b of row x[:-1] of ``strips[j]``.
-
-    Box b is the one of side ``scale`` at offset ``offsets[j]`` that holds
-    the site, found as in ``_mark_boxes``. The rows are numbered row-major
-    over the sites of the leading axes, ``cells`` of them on each (a tuple,
-    so the loop over axes unrolls).
-    """
-    dim = points.shape[1]
-    for i in range(len(points)):
-        row = 0
-        for a in range(dim - 1):
-            row = row * cells[a] + np.int64(points[i, a])  # integers only: no rounding
-        for j in range(len(offsets)):
-            last = np.int64(np.floor((points[i, dim - 1] - (-_HALF - offsets[j])) / scale))
-            strips[j, row, last >> 6] |= np.uint64(1) << np.uint64(last & 63)
-
-
-@jit
-def _mark_boxes(points, offsets, scale, radius, shape, first, bitmaps, out, row0=0):
-    """Set the bit of every box a particle touches in grids ``first``, ``first + 1``, ...; count the visits.
-
-    Grid g has boxes of side ``scale`` and its corner at -1/2 - offsets[i]
-    on an axis where its offset index is i: the digits of g in base
-    ``len(offsets)``, axis 0 the most significant. ``radius == 0`` puts each
-    particle in the one box holding its centre; ``radius > 0`` in every box
-    its ball overlaps. ``shape`` is the grids' shape on three axes (see
-    ``_slab``): ``bitmaps[k]`` is grid ``first + k``'s bitmap, a row per box
-    of the leading axes (row-major), a bit per box of the last axis, its
-    rows those from ``row0`` on (boxes in other rows are left out). With no
-    ``bitmaps`` grid ``first``'s every visit (its box on the three axes) is
-    written to ``out`` instead.
-    """
-    pad = 3 - points.shape[1]
-    grids = len(bitmaps) if len(bitmaps) > 0 else 1
-    many = len(offsets)
-    r2 = radius * radius
-    # A particle's boxes on each axis for each offset, shared by the grids:
-    # its home box, then the one across the nearer face when the ball
-    # reaches it (with s >= 2r it reaches no further), at squared distance
-    # gap2. A 2D set has an axis 0 of one box, with one offset.
-    box = np.zeros((3, many, 2), np.int64)
-    reach = np.ones((3, many), np.int64)
-    gap2 = np.zeros((3, many))
-    visits = 0
-    for i in range(len(points)):
-        for a in range(pad, 3):
-            for j in range(many):
-                u = points[i, a - pad] - (-_HALF - offsets[j])
-                home = np.int64(np.floor(u / scale))
-                box[a, j, 0] = home
-                if radius > 0.0:
-                    below = u - home * scale
-                    above = (home + 1) * scale - u
-                    gap2[a, j] = min(below, above) ** 2
-                    box[a, j, 1] = home - 1 if below <= above else home + 1
-                    reach[a, j] = 2 if gap2[a, j] < r2 else 1
-        # A box across faces on several axes is reached when the squared
-        # distances, added axis by axis in order, stay below r2 (the order
-        # of the additions is part of the rule: it fixes the rounding).
-        for j0 in range(1 if pad else many):
-            for e0 in range(reach[0, j0]):
-                d0 = gap2[0, j0] if e0 else 0.0
-                for j1 in range(many):
-                    base = (j0 * many + j1) * many - first
-                    if base + many <= 0 or base >= grids:
-                        continue
-                    for e1 in range(reach[1, j1]):
-                        d1 = d0 + gap2[1, j1] if e1 else d0
-                        if e1 and d1 >= r2:
-                            continue
-                        row = box[0, j0, e0] * shape[1] + box[1, j1, e1] - row0
-                        if len(bitmaps) > 0 and not 0 <= row < bitmaps.shape[1]:
-                            continue
-                        for j2 in range(max(-base, 0), min(grids - base, many)):
-                            for e2 in range(reach[2, j2]):
-                                if e2 and d1 + gap2[2, j2] >= r2:
-                                    continue
-                                last = box[2, j2, e2]
-                                if len(bitmaps) > 0:
-                                    bitmaps[base + j2, row, last >> 6] |= np.uint64(1) << np.uint64(last & 63)
-                                else:
-                                    out[visits] = box[0, j0, e0], box[1, j1, e1], last
-                                    visits += 1
-    return visits
-
-
-@jit
-def _coarsen(fine, fine_shape, part, shift, factor, coarse, shape):
-    """Fill ``coarse``, grids whose boxes are unions of ``fine``'s boxes, and return their least count.
-
-    Both are stacks of bitmaps laid out as in ``_mark_boxes``, one per grid,
-    their shapes on three axes. Coarse grid g has offset index i_a on axis a,
-    digit a of g (axis 0 most significant) in base ``shift.shape[1]``, and
-    takes its boxes from fine grid sum_a part[a, i_a]. On a leading axis its
-    box b is the union of fine boxes factor[a] b - shift[a, i_a] + k, k <
-    factor[a]. On the last axis factor is 1 (box b is fine box b) or 2 (fine
-    boxes 2b - shift and 2b + 1 - shift).
-    """
-    bases, words, pair = shift.shape[1], fine.shape[2], factor[2] == 2
-    step = np.zeros(3, np.int64)
-    # The fine boxes under each coarse box of the leading axes, clipped to the fine grid.
-    first = np.zeros((2, max(shape[0], shape[1])), np.int64)
-    stop = np.zeros((2, max(shape[0], shape[1])), np.int64)
-    merged = np.zeros(words, np.uint64)
-    best = -1
-    for g in range(coarse.shape[0]):
-        rest, grid = g, 0
-        for a in range(2, -1, -1):
-            grid += part[a, rest % bases]
-            step[a] = shift[a, rest % bases]
-            rest //= bases
-        for a in range(2):
-            for b in range(shape[a]):
-                first[a, b] = max(factor[a] * b - step[a], 0)
-                stop[a, b] = min(factor[a] * (b + 1) - step[a], fine_shape[a])
-        rows, out, up = fine[grid], coarse[g], np.uint64(step[2])
-        count = 0
-        for b0 in range(shape[0]):
-            for b1 in range(shape[1]):
-                # The fine rows under this coarse row: a run of consecutive rows
-                # per fine box of axis 0. Short rows (3D) are ORed word by word
-                # in a register, long ones (2D) row by row, which vectorises;
-                # each way is twice as fast as the other on its rows. (The runs
-                # are counted by fine box, not stepped by row: a range with a
-                # step costs a division, which cost as much as the rest.)
-                lo, hi = first[1, b1], stop[1, b1]
-                if words <= 2:
-                    for w in range(words):
-                        acc = np.uint64(0)
-                        for f0 in range(first[0, b0], stop[0, b0]):
-                            run = f0 * fine_shape[1]
-                            for r in range(run + lo, run + hi):
-                                acc |= rows[r, w]
-                        merged[w] = acc
-                else:
-                    merged[:] = 0
-                    for f0 in range(first[0, b0], stop[0, b0]):
-                        run = f0 * fine_shape[1]
-                        for r in range(run + lo, run + hi):
-                            for w in range(words):
-                                merged[w] |= rows[r, w]
-                row = b0 * shape[1] + b1
-                carry = np.uint64(0)
-                for w in range(out.shape[1]):
-                    if pair:
-                        # Fine words 2w and 2w + 1, moved up a bit when shifted
-                        # (the top bit of word 2w - 1 coming in), halved unless
-                        # empty (as most are in sparse sets).
-                        low = merged[2 * w] if 2 * w < words else np.uint64(0)
-                        high = merged[2 * w + 1] if 2 * w + 1 < words else np.uint64(0)
-                        if up:
-                            low, high, carry = (low << up) | carry, (high << up) | (low >> _TOP), high >> _TOP
-                        word = _pairs(low) | (_pairs(high) << np.uint64(32)) if low | high else np.uint64(0)
-                    else:
-                        word = merged[w]
-                    out[row, w] = word
-                    count += _ones(word)
-        best = count if best < 0 else min(best, count)
-    return best
-
-
-@jit
-def _least_count(bitmaps):
-    """Fewest set bits in a bitmap of the stack."""
-    best = -1
-    for g in range(len(bitmaps)):
-        count = 0
-        for row in range(bitmaps.shape[1]):
-            for w in range(bitmaps.shape[2]):
-                count += _ones(bitmaps[g, row, w])
-        best = count if best < 0 else min(best, count)
-    return best
-
-
 def _slab(shape):
     """``shape`` on three axes, as the kernels take it: a 2D grid is a 3D one with a single box on axis 0."""
     return (1,) * (3 - len(shape)) + tuple(int(n) for n in shape)
 
 
 def _halving(fine_offsets, half, offsets, dim):
-    """``_coarsen``'s ``part`` and ``shift`` that make the grids of side 2 ``half`` from those of side ``half``.
+    """``coarsen``'s ``part`` and ``shift`` that make the grids of side 2 ``half`` from those of side ``half``.
 
     The box of side 2s at offset o is the union of 2**dim boxes of the
     grid of side s at offset o % s, shifted by one where o >= s. Fine grids
@@ -526,10 +244,10 @@ class PrefixBoxes:
         ends = np.array([len(p)] if ends is None else ends, np.int64).ravel()
         if not (ends.size and 1 <= ends.min() and ends.max() <= len(p)):
             raise ValueError(f"ends: expected prefix lengths in 1..{len(p)}")
-        self.points, self.ends, self.radius = p, ends, 0.0 if lattice else _HALF
+        self.points, self.ends, self.radius = p, ends, 0.0 if lattice else HALF
         p = p[: ends.max()]
         low, side = _corner(p)
-        extent = float(side) + 2 * _HALF
+        extent = float(side) + 2 * HALF
         if scales is None:
             scales = default_scales(extent)
         # A sweep measures every cluster at the same scales: checked and planned once.
@@ -566,10 +284,10 @@ def _sorted_count(prefix, side, offsets, radius):
     points = prefix - np.array([c.min() for c in prefix.T])
     high = np.array([c.max() for c in points.T])
     dim = points.shape[1]
-    shape = np.floor((high + radius + _HALF + offsets[-1]) / side).astype(np.int64) + 1
+    shape = np.floor((high + radius + HALF + offsets[-1]) / side).astype(np.int64) + 1
     visits = np.empty((len(points) * (2**dim if radius > 0.0 else 1), 3), np.int64)
     none = np.empty((0, 0, 0), np.uint64)
-    return min(len(np.unique(visits[: _mark_boxes(points, offsets, float(side), radius, _slab(shape), g, none, visits)],
+    return min(len(np.unique(visits[: mark_boxes(points, offsets, float(side), radius, _slab(shape), g, none, visits)],
                              axis=0)) for g in range(len(offsets) ** dim))
 
 
@@ -663,8 +381,8 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
     for i in range(n):
         for a in range(dim):
             high[a] = max(high[a], prefix[i, a] - low[a])
-    extent = float(high.max()) + 2 * _HALF
-    cuts, start, buffer = _pieces(prefix, low, np.int64(high[0]), _ordered(prefix, high), piece)
+    extent = float(high.max()) + 2 * HALF
+    cuts, start, buffer = pieces(prefix, low, np.int64(high[0]), ordered(prefix, high), piece)
     pad = 3 - dim
     kids = np.zeros(len(sides), np.int64)  # of each side, those below the extent
     for k in range(len(sides)):
@@ -688,12 +406,12 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
             if _grids_within(cap, shape) >= grids:
                 stack = np.empty((grids, shape[0] * shape[1], (shape[2] + 63) // 64), np.uint64)
                 route[k] = HALVED
-                count = _coarsen(stacks[m], (fine[0], fine[1], fine[2]), part[k, :, : len(offsets)].copy(),
-                                 shift[k, :, : len(offsets)].copy(), halves, stack, (shape[0], shape[1], shape[2]))
+                count = coarsen(stacks[m], (fine[0], fine[1], fine[2]), part[k, :, : len(offsets)].copy(),
+                                shift[k, :, : len(offsets)].copy(), halves, stack, (shape[0], shape[1], shape[2]))
         if count < 0:  # from the particles
             shape = np.ones(3, np.int64)
             for a in range(dim):
-                shape[pad + a] = np.int64(np.floor((high[a] + radius + _HALF + offsets[-1]) / side)) + 1
+                shape[pad + a] = np.int64(np.floor((high[a] + radius + HALF + offsets[-1]) / side)) + 1
             per_pass = _grids_within(cap, shape)
             # Integer sites need no marking per grid. They are put in their boxes on
             # the last axis only, in one strip per offset there, a row per site of
@@ -711,21 +429,21 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                 route[k] = STRIPS
                 strips = np.zeros((len(offsets), cells[0] * cells[1], (cells[2] + 63) // 64), np.uint64)
                 for c in range(len(cuts) - 1):
-                    points = _piece(prefix, low, start, cuts, c, buffer)
+                    points = nth_piece(prefix, low, start, cuts, c, buffer)
                     if dim == 2:
-                        _mark_sites(points, offsets, float(side), (cells[1],), strips)
+                        mark_sites(points, offsets, float(side), (cells[1],), strips)
                     else:
-                        _mark_sites(points, offsets, float(side), (cells[0], cells[1]), strips)
+                        mark_sites(points, offsets, float(side), (cells[0], cells[1]), strips)
                 if side == 1:
-                    count, stack = _least_count(strips), strips
+                    count, stack = least_count(strips), strips
                 else:
                     stack = np.empty((grids, shape[0] * shape[1], (shape[2] + 63) // 64), np.uint64)
                     merge, moved = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
                     merge[2] = np.arange(len(offsets))
                     for a in range(pad, 2):
                         moved[a] = offsets
-                    count = _coarsen(strips, (cells[0], cells[1], cells[2]), merge, moved,
-                                     (side if dim == 3 else 1, side, 1), stack, (shape[0], shape[1], shape[2]))
+                    count = coarsen(strips, (cells[0], cells[1], cells[2]), merge, moved,
+                                    (side if dim == 3 else 1, side, 1), stack, (shape[0], shape[1], shape[2]))
             elif per_pass == 0:
                 row_words = (shape[2] + 63) // 64
                 rows, band = shape[0] * shape[1], cap // (64 * row_words)
@@ -740,9 +458,9 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                         for row0 in range(0, rows, band):
                             bits[:] = 0
                             for c in range(len(cuts) - 1):
-                                _mark_boxes(_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
-                                            (shape[0], shape[1], shape[2]), g, bits, np.empty((0, 0), np.int64), row0)
-                            total += _least_count(bits)
+                                mark_boxes(nth_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
+                                           (shape[0], shape[1], shape[2]), g, bits, np.empty((0, 0), np.int64), row0)
+                            total += least_count(bits)
                         count = total if count < 0 else min(count, total)
             else:
                 route[k] = ONE_PASS if per_pass >= grids else PASSES
@@ -750,9 +468,9 @@ def _count_prefix(prefix, integer, radius, sides, own, n_own, order, parent, par
                     stack = np.zeros((min(per_pass, grids - first), shape[0] * shape[1], (shape[2] + 63) // 64),
                                      np.uint64)
                     for c in range(len(cuts) - 1):
-                        _mark_boxes(_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
-                                    (shape[0], shape[1], shape[2]), first, stack, np.empty((0, 0), np.int64))
-                    least = _least_count(stack)
+                        mark_boxes(nth_piece(prefix, low, start, cuts, c, buffer), offsets, float(side), radius,
+                                   (shape[0], shape[1], shape[2]), first, stack, np.empty((0, 0), np.int64))
+                    least = least_count(stack)
                     count = least if count < 0 else min(count, least)
                 if per_pass < grids:
                     stack = np.empty((0, 0, 0), np.uint64)

@@ -8,7 +8,7 @@ import pytest
 import dlasweep
 import naive
 from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
-from dlasweep import boxes, measure
+from dlasweep import box_bitmaps, boxes, measure
 from dlasweep.boxes import box_counts, default_scales
 from dlasweep.measure import max_radius, radius_of_gyration
 
@@ -81,8 +81,8 @@ def test_pieces_are_the_shifted_prefix_in_first_axis_order(most):
     low = prefix.min(axis=0)
     shifted = prefix - low
     expected = shifted[np.argsort(shifted[:, 0], kind="stable")]
-    cuts, start, buffer = boxes._pieces(prefix, low, np.int64(shifted[:, 0].max()), True, most)
-    pieces = [boxes._piece(prefix, low, start, cuts, c, buffer).copy() for c in range(len(cuts) - 1)]
+    cuts, start, buffer = box_bitmaps.pieces(prefix, low, np.int64(shifted[:, 0].max()), True, most)
+    pieces = [box_bitmaps.nth_piece(prefix, low, start, cuts, c, buffer).copy() for c in range(len(cuts) - 1)]
     np.testing.assert_array_equal(np.concatenate(pieces), expected)
     widest = np.bincount(shifted[:, 0]).max()
     assert all(len(piece) <= max(most, widest) for piece in pieces)
@@ -158,8 +158,8 @@ def marked(points, side, offsets, radius):
     """Every grid of ``side`` marked from the particles, in one pass: their bitmaps and shape."""
     shape = np.floor((points.max(axis=0) + radius + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
     stack = bitmaps(shape, len(offsets) ** points.shape[1])
-    boxes._mark_boxes(points.astype(float), np.array(offsets), float(side), radius, slab(shape), 0, stack,
-                      np.empty((0, 0), np.int64))
+    box_bitmaps.mark_boxes(points.astype(float), np.array(offsets), float(side), radius, slab(shape), 0, stack,
+                           np.empty((0, 0), np.int64))
     return stack, shape
 
 
@@ -169,11 +169,11 @@ def merged(points, side, offsets):
     shape = np.floor((high + 0.5 + offsets[-1]) / side).astype(np.int64) + 1
     cells = np.r_[high[:-1] + 1, shape[-1]]
     strips = bitmaps(cells, len(offsets))
-    boxes._mark_sites(points, np.array(offsets), float(side), tuple(int(n) for n in cells[:-1]), strips)
+    box_bitmaps.mark_sites(points, np.array(offsets), float(side), tuple(int(n) for n in cells[:-1]), strips)
     part, shift = np.zeros((3, len(offsets)), np.int64), np.zeros((3, len(offsets)), np.int64)
     part[2], shift[3 - dim : 2] = np.arange(len(offsets)), offsets
     stack = bitmaps(shape, len(offsets) ** dim)
-    count = boxes._coarsen(strips, slab(cells), part, shift, slab((side,) * (dim - 1) + (1,)), stack, slab(shape))
+    count = box_bitmaps.coarsen(strips, slab(cells), part, shift, slab((side,) * (dim - 1) + (1,)), stack, slab(shape))
     return count, stack, shape
 
 
@@ -183,7 +183,7 @@ def halved(fine, fine_shape, fine_offsets, side, offsets):
     shape = fine_shape // 2 + 1
     part, shift = boxes._halving(fine_offsets, side // 2, offsets, dim)
     stack = bitmaps(shape, len(offsets) ** dim)
-    count = boxes._coarsen(fine, slab(fine_shape), part, shift, slab((2,) * dim), stack, slab(shape))
+    count = box_bitmaps.coarsen(fine, slab(fine_shape), part, shift, slab((2,) * dim), stack, slab(shape))
     return count, stack, shape
 
 
@@ -581,4 +581,4 @@ def test_particles_are_put_in_first_axis_order_only_where_their_bitmaps_outgrow_
     # 92 x 2 words of 8 bytes, or 2048 x 18; a 3D set of 64 x 64 rows of 1 word, or 201 x 201 of 4 words;
     # a first axis longer than the sort's table allows (and than the set's size) is never sorted.
     points = np.zeros((1000, len(high)))
-    assert boxes._ordered(points, np.array(high, float)) is ordered
+    assert box_bitmaps.ordered(points, np.array(high, float)) is ordered
