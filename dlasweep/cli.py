@@ -20,23 +20,21 @@ import traceback
 import warnings
 from pathlib import Path
 
-
 from . import export as _export
+from . import info, ragged, slurm, store
 from . import params as _params
 from . import plan as _plan
-from . import info, ragged, slurm, store
 from ._entry import command_of
 from ._version import __version__
 from .bench import MODELS as BENCH_MODELS
 from .grow import grow
+from .parts import Interrupted, ResumeError
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
 from .progress import follow, growth_bar, steps_bar
 from .report import ReportFolderError, earlier_report, report
-from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .schema import one_line as _one_line
-from .parts import Interrupted, ResumeError
+from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 from .sweep import embedded_threads, run_sweep, scheduler_address
-
 
 
 class UsageError(ValueError):
