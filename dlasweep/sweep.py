@@ -224,8 +224,8 @@ def _more_seeds(spec, n, half_width, failed):
 
 def _compiles(spec) -> bool:
     """Whether the first tasks compile kernels: numba's cache lacks a growth kernel the spec needs."""
-    kernels = _first_task_of_each_kernel(spec)
-    return not all(compiled(model, dim, 2 if lockstep else 1) for model, dim, lockstep in kernels)
+    return not all(compiled(model, dim, task.params["walkers"])
+                   for (model, dim, _), task in _first_task_of_each_kernel(spec).items())
 
 
 def _first_task_of_each_kernel(spec) -> dict:

@@ -430,7 +430,8 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled", lambda model, dim, walkers: model != "offlattice")
+    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled",
+                        lambda model, dim, walkers: model != "offlattice")
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end

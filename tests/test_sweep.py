@@ -300,6 +300,13 @@ def test_each_model_and_dimension_swept_is_a_kernel_of_its_own():
                for key, task in kernels.items())
 
 
+def test_a_spec_of_lockstep_walkers_compiles_when_only_one_walkers_kernel_is_cached(monkeypatch):
+    monkeypatch.setattr(sweep, "compiled", lambda model, dim, walkers: walkers == 1)
+    one = parse_spec("name = 'one'\n[grid]\nn_particles = [5]\nseeds = 1\nsize = [40]\n[model]\nwalkers = [1]\n")
+    many = parse_spec("name = 'many'\n[grid]\nn_particles = [5]\nseeds = 1\nsize = [40]\n[model]\nwalkers = [1, 3]\n")
+    assert not sweep._compiles(one) and sweep._compiles(many)
+
+
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
     spec = parse_spec(TINY_SPEC)
     code = "import sys, dlasweep.sweep as s, dlasweep.spec as p; print(s._compiles(p.parse_spec(sys.argv[1])))"
