@@ -1,14 +1,17 @@
 """The ``dlasweep`` console command's entry: Ctrl-C at any moment ends it in one line.
 
-``cli`` loads numpy, numba and netCDF (about 1.5 s); an interrupt then
-would otherwise print a traceback. The package's own ``__init__`` loads
-nothing heavy, so this module runs before any of it.
+A command loads numpy, numba and netCDF (about 1.5 s): ``cli`` itself,
+then the modules of the command (``loading``); an interrupt then would
+otherwise print a traceback. The package's own ``__init__`` loads nothing
+heavy, so this module runs before any of it.
 """
 
 import _thread
+import contextlib
 import os
 import signal
 import sys
+import threading
 import time
 
 REDELIVERY_SECONDS = 0.05
@@ -16,14 +19,24 @@ REDELIVERY_SECONDS = 0.05
 
 
 def run() -> None:
-    """Run the command (``cli.run``); exit 130 with one line on a Ctrl-C that ``cli`` did not catch.
-
-    While ``cli`` loads, Ctrl-C is noted as well as raised: a library that
-    swallowed it (1 interrupt in about 400 while loading did, with no trace)
-    or turned it into another error (``RuntimeError`` from a class's
-    ``__set_name__``) would otherwise leave the command to run on.
-    """
+    """Run the command (``cli.run``); exit 130 with one line on a Ctrl-C that ``cli`` did not catch."""
     sys.unraisablehook = _deliver_again(sys.unraisablehook)
+    try:
+        with loading():
+            from .cli import run as main
+        main()
+    except KeyboardInterrupt:
+        print(f"{command_of(sys.argv[1:])}: interrupted", file=sys.stderr, flush=True)
+        os._exit(130)
+
+
+@contextlib.contextmanager
+def loading():
+    """Within, Ctrl-C is noted as well as raised, and raised again on leaving when the modules loading
+    swallowed it (1 interrupt in about 400 while loading was, with no trace) or turned it into another
+    error (``RuntimeError`` from a class's ``__set_name__``): the command would otherwise run on.
+
+    Only in the main thread, where Ctrl-C is not ignored (a shell's background job ignores it)."""
     noted = []
     handler = signal.getsignal(signal.SIGINT)
 
@@ -31,23 +44,19 @@ def run() -> None:
         noted.append(signum)
         handler(signum, frame)
 
-    noting = handler is signal.default_int_handler  # not where Ctrl-C is ignored (a shell's background job)
+    noting = handler is signal.default_int_handler and threading.current_thread() is threading.main_thread()
     if noting:
         signal.signal(signal.SIGINT, note)
     try:
-        try:
-            from .cli import run as main
-        except Exception:
-            if not noted:
-                raise
-        if noted:
-            raise KeyboardInterrupt
+        yield
+    except Exception:
+        if not noted:
+            raise
+    finally:
         if noting:
             signal.signal(signal.SIGINT, handler)
-        main()
-    except KeyboardInterrupt:
-        print(f"{command_of(sys.argv[1:])}: interrupted", file=sys.stderr, flush=True)
-        os._exit(130)
+    if noted:
+        raise KeyboardInterrupt
 
 
 def command_of(argv) -> str:

@@ -21,6 +21,7 @@ import xarray as xr
 
 from . import store
 from .bench_targets import (
+    MODELS,
     SCALING,
     cost_exponent,
     cost_exponent_range,
@@ -53,12 +54,6 @@ BENCH_SCHEMA = {
 its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
 
 
-MODELS = {
-    "lattice-2d": {"model": "lattice", "dim": 2},
-    "offlattice-2d": {"model": "offlattice", "dim": 2},
-    "lattice-3d": {"model": "lattice", "dim": 3},
-    "offlattice-3d": {"model": "offlattice", "dim": 3},
-}
 NAIVE = {"jumps": False, "kill_factor": 2.0}
 COUNTS = {
     "lattice-2d": [10_000, 100_000, 1_000_000],

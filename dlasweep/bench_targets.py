@@ -5,11 +5,21 @@ step) and the table of each figure beside its target (``dlasweep bench --full``)
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import xarray as xr
 
-from .schema import plain
+if TYPE_CHECKING:
+    import xarray as xr
 
+MODELS = {
+    "lattice-2d": {"model": "lattice", "dim": 2},
+    "offlattice-2d": {"model": "offlattice", "dim": 2},
+    "lattice-3d": {"model": "lattice", "dim": 3},
+    "offlattice-3d": {"model": "offlattice", "dim": 3},
+}
+"""The models ``dlasweep bench`` grows, by the names its targets, tables and ``--model`` use. This
+module loads neither xarray nor numba: the CLI reads the names while it builds its options."""
 PARENT_BYTES = 4
 """Each particle's parent (an int32), which issue 25's memory targets allow beside their own."""
 TARGETS = {
@@ -49,6 +59,8 @@ def target_table(ds: xr.Dataset) -> list[str]:
     """Issue 25's table: seconds at 1e7 and 1e8, memory added per particle
     there, the cost exponent and the growth of steps per particle from 1e5
     to 1e7, each beside its target (markdown rows)."""
+    from .schema import plain
+
     counts = sorted({n for t in TARGETS.values() for n in t["seconds"]})
     sizes = sorted({n for t in TARGETS.values() for n in t["bytes"]})
     lo, hi = SCALING
@@ -111,10 +123,10 @@ def cost_exponent_range(exact: xr.Dataset) -> tuple[float, float]:
     highest the other way round. The host's noise over the bench, not an error of the law.
     """
     fit = _in_scaling(exact)
-    log_n = np.log(fit.n.values.astype(float))
+    log_n = np.log(fit.n.astype(float))
     above = log_n > log_n.mean()
-    lowest = xr.where(above, fit.seconds_low, fit.seconds_high)
-    highest = xr.where(above, fit.seconds_high, fit.seconds_low)
+    lowest = fit.seconds_low.where(above, fit.seconds_high)
+    highest = fit.seconds_high.where(above, fit.seconds_low)
     return _slope(fit, lowest), _slope(fit, highest)
 
 

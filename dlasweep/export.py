@@ -27,8 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .tree import branch_paths, strahler
-
 FORMATS = (".csv", ".ply", ".obj", ".svg")
 MESHES = ("spheres", "tubes")
 PICTURES = (".png", ".svg")
@@ -282,6 +280,9 @@ def branch_polylines(cluster):
     -------
     iterator of (int, ndarray (k, 2))
     """
+    # numba's kernels: loaded here, so that the CLI builds its options without them
+    from .tree import branch_paths, strahler
+
     points = cluster.points[:, :2]
     nodes, offsets, orders = branch_paths(cluster.parents, strahler(cluster.parents))
     period = cluster.params["size"] if cluster.params.get("seed_shape") == "line" else 0

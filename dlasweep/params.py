@@ -296,6 +296,11 @@ def _resolve(params) -> dict:
     return p
 
 
+def one_line(err) -> str:
+    """An exception's message on one line (its type's name when it has none): error messages stay one line."""
+    return " ".join(str(err).split()) or err.__class__.__name__
+
+
 def text(value) -> str:
     """A value (numpy scalars too) as a user writes it on the command line or in a spec: ``true``, not ``True``."""
     value = value.item() if hasattr(value, "item") else value

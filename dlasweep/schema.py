@@ -184,11 +184,6 @@ class StoreError(ValueError):
     """A file that is not a readable dlasweep dataset; one line naming it."""
 
 
-def one_line(err) -> str:
-    """An exception's message on one line (its type's name when it has none): error messages stay one line."""
-    return " ".join(str(err).split()) or err.__class__.__name__
-
-
 def ragged_dtype(lattice: bool):
     """Type of stored positions: int32 for lattice sites, float64 off the lattice."""
     return np.int32 if lattice else np.float64

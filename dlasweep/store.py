@@ -21,8 +21,9 @@ import xarray as xr
 
 from . import params as _params
 from ._version import __version__
-from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, one_line,
-                     ragged_columns, ragged_dtype)
+from .params import one_line
+from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns,
+                     ragged_dtype)
 
 
 def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:

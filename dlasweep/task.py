@@ -17,7 +17,7 @@ from . import measure, schema
 from .boxes import default_scales
 from .fit import growth_counts
 from .grow import grow, grow_many
-from .params import Status
+from .params import Status, one_line
 from .spec import Spec
 
 
@@ -103,4 +103,4 @@ def error_result(counts, n_scales, dim, message) -> dict:
     result = {name: schema.blank(name, shapes.get(name, n_counts)) for name in (*schema.SCIENCE, "wall_time")}
     result["status"][:] = Status.error
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": schema.blank("diffusion_time", 0),
-            "parent": schema.blank("parent", 0), "error": np.array(schema.one_line(message))}
+            "parent": schema.blank("parent", 0), "error": np.array(one_line(message))}

@@ -143,7 +143,7 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
     lines = []
     ds = bench.run_bench(full=True, echo=lines.append)
     lo, hi = bench_targets.SCALING
-    for name, params in bench.MODELS.items():
+    for name, params in bench_targets.MODELS.items():
         mine = [i for i, call in enumerate(calls) if call[:2] == (params["model"], params["dim"])]
         firsts = [i for i in mine if calls[i][2] == lo]
         last = next(i for i in mine if calls[i][2] == hi)

@@ -101,6 +101,22 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     assert files_under(tmp_path) == before
 
 
+HEAVY = ("numba", "xarray", "dask", "distributed", "matplotlib", "pandas", "scipy", "netCDF4")
+"""What the commands' work loads (about 1.5 s), and the help and the parser's refusals must not."""
+
+
+@pytest.mark.parametrize("argv, status", [
+    (["--help"], 0), (["grow", "--help"], 0), (["bench", "--help"], 0), (["slurm", "--help"], 0),
+    (["grow", "-n", "ten", "-o", "a.nc"], 2), (["bench", "--model", "nope"], 2), (["frobnicate"], 2),
+])
+def test_help_and_bad_options_load_no_numerics(argv, status, tmp_path):
+    script = ("import sys\nfrom dlasweep.cli import main\ncode = main(sys.argv[1:])\n"
+              f"print(sorted(m for m in {HEAVY!r} if m in sys.modules), code)")
+    done = subprocess.run([sys.executable, "-c", script, *argv], capture_output=True, text=True, cwd=tmp_path)
+    assert done.stdout.splitlines()[-1] == f"[] {status}", done.stdout + done.stderr
+    assert status == 0 or len(done.stderr.strip().splitlines()) == 1
+
+
 def test_no_command_prints_usage_and_exits_2(run_cli):
     status, out, err = run_cli()
     assert status == 2 and out == ""
@@ -122,12 +138,14 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
 @pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
 def test_n_is_any_integral_number(text, n, run_cli, tmp_path, monkeypatch):
     asked = []
+    module = importlib.import_module("dlasweep.grow")
+    grow = module.grow
 
     def small(n, seed, **params):
         asked.append(n)
-        return dla.grow(5, seed, **params)
+        return grow(5, seed, **params)
 
-    monkeypatch.setattr(cli, "grow", small)
+    monkeypatch.setattr(module, "grow", small)
     status, _, err = run_cli("grow", "-n", text, "--max-steps", "1e6", "-o", tmp_path / "c.nc")
     assert status == 0, err
     assert asked == [n]

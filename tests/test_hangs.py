@@ -116,7 +116,40 @@ _entry.run()
 """
 
 
-@pytest.mark.parametrize("script", [DROPPED_INTERRUPT, SWALLOWED_INTERRUPT], ids=["ignored", "swallowed"])
+SWALLOWED_WHILE_THE_COMMAND_LOADS = """
+import contextlib, importlib.abc, importlib.machinery, os, signal, sys, time
+from dlasweep import _entry
+
+@contextlib.contextmanager
+def busy(argv):
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        pass
+    yield
+
+class Swallowing(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    def find_spec(self, name, path, target=None):
+        return importlib.machinery.ModuleSpec(name, self) if name == "dlasweep.store" else None
+
+    def create_module(self, spec):
+        return None
+
+    def exec_module(self, module):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            pass  # as a library might while the command's modules load (cli.main), with no trace
+        module.command_line = busy
+
+sys.meta_path.insert(0, Swallowing())
+sys.argv = ["dlasweep", "grow", "-n", "10", "-o", "c.nc"]
+_entry.run()
+"""
+
+
+@pytest.mark.parametrize("script", [DROPPED_INTERRUPT, SWALLOWED_INTERRUPT, SWALLOWED_WHILE_THE_COMMAND_LOADS],
+                         ids=["ignored", "swallowed", "swallowed while the command loads"])
 def test_ctrl_c_that_python_must_ignore_still_ends_the_command(script, tmp_path):
     # The hang CI met once: the interrupt landed in an import lock's weakref callback while cli loaded, was
     # printed as ignored, and the growth ran on. Here it lands in a __del__, or a module swallows it, every time.

@@ -32,8 +32,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from dlasweep.bench import MODELS
-from dlasweep.bench_targets import SCALING, TARGETS
+from dlasweep.bench_targets import MODELS, SCALING, TARGETS
 from dlasweep.host import latency_line, read_latency
 
 _SIDE = """
@@ -124,7 +123,7 @@ def summary(rows: list[dict], command: str, hosts: dict | None = None) -> str:
 
 def main(argv=None) -> None:
     parser = _Parser(description=__doc__.splitlines()[0])
-    parser.add_argument("--models", nargs="+", default=list(MODELS), help="models of dlasweep.bench.MODELS")
+    parser.add_argument("--models", nargs="+", default=list(MODELS), help="models of dlasweep.bench_targets.MODELS")
     parser.add_argument("--n", type=float, default=SCALING[1], help="the long cluster's N")
     parser.add_argument("--short", type=float, default=SCALING[0], help="the short clusters' N")
     parser.add_argument("--rounds", type=int, default=2, help="rounds, cores swapped each round")
