@@ -12,7 +12,6 @@ that ``--help`` and a bad option answer in about 0.4 s, not 1.8.
 from __future__ import annotations
 
 import argparse
-import atexit
 import contextlib
 import dataclasses
 import os
@@ -47,22 +46,6 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def run() -> None:
-    """The ``dlasweep`` command: ``main``, then exit without tearing the interpreter down.
-
-    Freeing the modules a command loads (numba and LLVM, dask, pandas)
-    took 0.4 to 0.6 s at exit, as long as a small sweep's clusters take to
-    grow. By the time ``main`` returns every file is closed; the exit
-    handlers still run and the output is flushed before the process ends.
-    """
-    code = main()
-    atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError):  # a closed pipe, a closed stream
-            stream.flush()
-    os._exit(code)
-
-
 def main(argv=None) -> int:
     """Run the command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
@@ -87,7 +70,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as err:
         if command == "dlasweep":  # interrupted while parsing
             command = command_of(argv)
-        _say(f"{command}: interrupted{_kept(err)}")
+        _say(f"{command}: interrupted{err.kept_line() if isinstance(err, Interrupted) else ''}")
         return 130
     except Exception as err:
         if _refusal(err):
@@ -499,16 +482,6 @@ def _check_dataset(path: Path):
     """Refuse a folder given as a dataset (a report's folder, say) in one line; ``open_sweep`` checks the rest."""
     if path.is_dir():
         raise UsageError(f"{path}: is a folder, not a netCDF file written by `dlasweep sweep` or `dlasweep grow`")
-
-
-def _kept(interrupt) -> str:
-    """What an interrupted sweep kept, as the end of its line; nothing for other commands."""
-    if not isinstance(interrupt, Interrupted):
-        return ""
-    if interrupt.parts is None:
-        return "; no cluster had finished, nothing is kept"
-    clusters = "1 finished cluster" if interrupt.kept == 1 else f"{interrupt.kept} finished clusters"
-    return f"; {clusters} kept in {interrupt.parts}, continue with --resume"
 
 
 def _say(line: str):

@@ -43,6 +43,13 @@ class Interrupted(KeyboardInterrupt):
         super().__init__(kept, parts)
         self.kept, self.parts = kept, parts
 
+    def kept_line(self) -> str:
+        """What the sweep kept, as the end of the command's one line."""
+        if self.parts is None:
+            return "; no cluster had finished, nothing is kept"
+        clusters = "1 finished cluster" if self.kept == 1 else f"{self.kept} finished clusters"
+        return f"; {clusters} kept in {self.parts}, continue with --resume"
+
 
 class Parts:
     """The folder of finished cluster results of one sweep.

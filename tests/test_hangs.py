@@ -86,7 +86,7 @@ def busy():
     while time.monotonic() < deadline:
         pass
 
-cli.run = busy
+cli.main = busy
 sys.argv = ["dlasweep", "grow"]
 _entry.run()
 """
