@@ -80,14 +80,15 @@ def target_table(ds: xr.Dataset) -> list[str]:
             pick = exact.where(exact.n == n, drop=True)
             return pick.isel(run=0) if pick.sizes["run"] else None
 
+        def cell(value, goal):
+            return f"{value:.1f}{verdict(value, goal)}"
+
         for n in counts:
             r = at(n)
-            seconds = None if r is None else float(r.seconds)
-            row.append("" if r is None else f"{seconds:.1f}{verdict(seconds, target['seconds'].get(n))}")
+            row.append("" if r is None else cell(float(r.seconds), target["seconds"].get(n)))
         for n in sizes:
             r = at(n)
-            per = None if r is None else float(r.added_memory) * 2**20 / n
-            row.append("" if r is None else f"{per:.1f}{verdict(per, target['bytes'].get(n))}")
+            row.append("" if r is None else cell(float(r.added_memory) * 2**20 / n, target["bytes"].get(n)))
         first, last = at(lo), at(hi)
         if first is None or last is None:
             row += ["", ""]

@@ -179,7 +179,8 @@ def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
     calls.clear()
     ds = bench.run_bench(quick=True, models=["lattice-2d", "lattice-2d"], echo=lines.append)
     quick = bench.QUICK_COUNT
-    assert sorted(calls) == [("lattice", 2, False, quick // 4), ("lattice", 2, True, quick // 4), ("lattice", 2, True, quick)]
+    assert sorted(calls) == [("lattice", 2, False, quick // 4), ("lattice", 2, True, quick // 4),
+                             ("lattice", 2, True, quick)]
     # from the command line, and a model it does not know: one line that names it, status 2, nothing written
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "--model", "offlattice-2d", "--model", "lattice-3d", "-o", str(out)]) == 0
