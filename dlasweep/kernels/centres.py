@@ -384,7 +384,11 @@ def pyramid_ball(field, pstart, dim, W, X0, X1, X2):
     samples, perf). Measured and not done: level 2 read first, and level 1's read
     skipped where level 2's value puts level 1 at its cap beneath X (each held cell
     below lies in a held cell above; the same clusters): 3D lattice 3e6 (seed 1,
-    side by side, the cores swapped) 70.1 and 69.0 s against 66.8 and 67.1."""
+    side by side, the cores swapped) 70.1 and 69.0 s against 66.8 and 67.1. Nor levels 1
+    and 2 read together, both loads issued before either is tested so that their misses
+    overlap (the same clusters, side by side, the cores swapped): 3D lattice 3e6 0.937 and
+    0.989 times the time (seed 1), 1.025 and 1.072 (seed 2); 3D off-lattice 3e6 0.958 and
+    1.048; 2D lattice 1e7 1.043 and 1.069."""
     step = _STEP[dim]
     for level in range(1, len(pstart) - 1):
         shift = FS + step * level
