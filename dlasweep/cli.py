@@ -222,7 +222,7 @@ def _export_cluster(args) -> int:
         raise UsageError(f"{args.dataset}: holds no parents (written before dlasweep stored them); "
                          f"{out.suffix} needs them")
     _export.write_cluster(cluster, out, seed, **how)
-    print(f"{out}: cluster {args.cluster}, {cluster.n} particles")
+    print(f"{out}: cluster {args.cluster}, {_params.counted(cluster.n, 'particle')}")
     return 0
 
 
@@ -258,7 +258,7 @@ def _grow(args) -> int:
     if cluster.status != _params.Status.ok.name:
         _say(f"dlasweep grow: stopped early ({cluster.status}) with {cluster.n} of {args.n} particles")
     _export.write_cluster(cluster, out, args.seed, **how)
-    print(f"{out}: {cluster.n} particles")
+    print(f"{out}: {_params.counted(cluster.n, 'particle')}")
     return 0
 
 
@@ -310,7 +310,7 @@ def _sweep(args) -> int:
         return 1
     grown = ds["n_grown"].size // ds.sizes["n_particles"]
     stored = "" if ds.sizes["cluster"] == grown else f" ({ds.sizes['cluster']} stored)"
-    print(f"{out}: {grown} clusters{stored} in {time.perf_counter() - start:.1f} s")
+    print(f"{out}: {_params.counted(grown, 'cluster')}{stored} in {time.perf_counter() - start:.1f} s")
     return 0
 
 

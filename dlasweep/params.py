@@ -301,6 +301,11 @@ def one_line(err) -> str:
     return " ".join(str(err).split()) or err.__class__.__name__
 
 
+def counted(n: int, noun: str) -> str:
+    """``n`` and the noun, plural unless n is 1: ``1 cluster``, ``1,800 particles``."""
+    return f"{n:,} {noun}{'' if n == 1 else 's'}"
+
+
 def text(value) -> str:
     """A value (numpy scalars too) as a user writes it on the command line or in a spec: ``true``, not ``True``."""
     value = value.item() if hasattr(value, "item") else value

@@ -17,6 +17,7 @@ import numpy as np
 
 from . import schema
 from .fit import growth_counts
+from .params import counted
 from .spec import Spec, SpecError
 from .task import sweep_scales
 
@@ -70,7 +71,8 @@ class Plan:
         return BASE_BYTES + self.growing + self.table
 
     def __str__(self) -> str:
-        return (f"plan: {self.clusters:,} clusters, {self.particles:,} particles ({self.stored:,} stored); "
+        return (f"plan: {counted(self.clusters, 'cluster')}, {counted(self.particles, 'particle')} "
+                f"({self.stored:,} stored); "
                 f"about {size(self.memory)} of memory, {size(self.disk)} of disk")
 
 

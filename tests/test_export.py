@@ -152,6 +152,8 @@ def test_the_commands_write_every_format(run_cli, tmp_path):
     status, out, err = run_cli("export", tmp_path / "one.nc", "--cluster", "0", "-o", tmp_path / "e.csv")
     assert status == 0 and out == f"{tmp_path / 'e.csv'}: cluster 0, 120 particles\n", err
     assert (tmp_path / "e.csv").read_bytes() == (tmp_path / "g.csv").read_bytes()
+    status, out, err = run_cli("grow", "-n", "1", "-o", tmp_path / "seed.csv")
+    assert status == 0 and out == f"{tmp_path / 'seed.csv'}: 1 particle\n", err
 
 
 @pytest.mark.parametrize("argv, named", [

@@ -27,6 +27,11 @@ def test_the_plan_counts_every_cluster_to_the_largest_count():
     assert plan.plan(spec, threads=64).growing == 12 * (plan.KERNEL_BYTES["lattice", 2] + 2 * LATTICE_2D_BYTES) * 150
 
 
+def test_a_plan_of_one_says_one_cluster_and_one_particle():
+    the_plan = plan.plan(parse_spec("[grid]\nn_particles = [1]\nseeds = 1\n"), threads=2)
+    assert str(the_plan).startswith("plan: 1 cluster, 1 particle (1 stored); about ")
+
+
 def test_a_target_sweep_is_planned_at_its_max_seeds_and_stored_clusters_are_counted():
     spec = parse_spec(TINY_SPEC.replace("root_seed = 12345", "target_ci = 0.01\nmax_seeds = 40\nstore_clusters = 2"))
     the_plan = plan.plan(spec, threads=1)

@@ -85,7 +85,7 @@ def test_the_installed_wheel_imports_from_site_packages_not_the_tree(installed):
 def test_the_installed_wheel_runs_every_documented_command(installed):
     _, home = installed
     assert "grow" in _run(installed, "--help")
-    assert "1000 particles" in _run(installed, "grow", "-n", "1000", "-o", "one.nc")
+    assert "1,000 particles" in _run(installed, "grow", "-n", "1000", "-o", "one.nc")
     assert "300 particles" in _run(installed, "grow", "-n", "300", "-o", "one.png")
     assert "particles: 1000" in _run(installed, "info", "one.nc")
     (home / "tiny.toml").write_text(TINY_SPEC)
