@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import reprlib
 import threading
 import time
 from dataclasses import dataclass, field
@@ -119,7 +120,7 @@ def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluste
         Root of the cluster's random stream. Growth never depends on ``n``:
         the cluster grown to ``n`` is a prefix of the one grown further.
     checkpoints : sequence of int, optional
-        Counts at which to record elapsed time (default: ``[n]``).
+        Counts at which to record elapsed time, whole numbers in [1, n] (default: ``[n]``).
     progress : callable, optional
         Called as ``progress(particles, seconds)`` every ``WATCH_SECONDS``
         while the cluster grows, and once at the end; the cluster is the same.
@@ -165,7 +166,11 @@ def _checked(n, checkpoints, params):
     if not _params.is_integer(n) or n < 1:
         raise ValueError(f"n: expected an integer >= 1, got {n!r}")
     p = _params.resolve(**params)
-    marks = np.unique(np.asarray([n] if checkpoints is None else checkpoints, dtype=np.int64))
+    given = np.asarray([n] if checkpoints is None else checkpoints)
+    # a whole count written as a float (1e3) is one; 10.5, a table or a word is not
+    if given.ndim != 1 or given.dtype.kind not in "iuf" or not np.all(np.isfinite(given) & (given == np.round(given))):
+        raise ValueError(f"checkpoints: expected a list of whole counts, got {reprlib.repr(checkpoints)}")
+    marks = np.unique(given.astype(np.int64))
     if len(marks) and (marks[0] < 1 or marks[-1] > n):
         raise ValueError(f"checkpoints: every count must lie in [1, {n}]")
     return p, marks

@@ -148,6 +148,19 @@ def test_invalid_count(n):
         dla.grow(n)
 
 
+@pytest.mark.parametrize("checkpoints, message", [
+    ([10.5], "whole counts"), ([[10, 20]], "whole counts"), (["10"], "whole counts"), ([True], "whole counts"),
+    ([float("nan")], "whole counts"), ([0], r"in \[1, 30\]"), ([31], r"in \[1, 30\]"),
+])
+def test_invalid_checkpoints_are_refused_before_growing(checkpoints, message):
+    with pytest.raises(ValueError, match=f"checkpoints: .*{message}"):
+        dla.grow(30, checkpoints=checkpoints)
+
+
+def test_whole_counts_written_as_floats_are_checkpoints():
+    assert list(dla.grow(30, checkpoints=[1e1, 20.0, 30]).checkpoints) == [10, 20, 30]
+
+
 def test_shortcuts_agree_where_they_should_and_depart_where_they_should():
     """Final Rg of 16 off-lattice clusters of 1000, each variant against the exact method.
 
