@@ -170,11 +170,21 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
                                                                  MIN_CI_SEEDS))
 
 
+def sweep_checked(ds):
+    """``ds`` when it is a sweep's Dataset, else one line naming it: a TypeError (not a Dataset) or a ValueError."""
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds: expected a sweep's xarray.Dataset (run_sweep, open_sweep), got {type(ds).__name__}")
+    if "box_count" not in ds or "n_grown" not in ds:
+        raise ValueError("ds: holds no sweep (no box_count or n_grown): one cluster from grow, or another dataset")
+    return ds
+
+
 class _Sweep:
     """The parts of a sweep dataset that the analysis reads, indexed by configuration."""
 
     def __init__(self, ds):
-        self.ds = ds = with_selected_clusters(ds)  # a selection on the grid (ds.sel) keeps its own clusters only
+        # a selection on the grid (ds.sel) keeps its own clusters only
+        self.ds = ds = with_selected_clusters(sweep_checked(ds))
         self.config_dims = config_dims(ds)
         self.shape = tuple(ds.sizes[d] for d in self.config_dims)
         self.counts = ds["n_particles"].values.astype(np.int64)

@@ -292,7 +292,7 @@ def fit_dimension(
     order = np.argsort(s)
     s, n = s[order], n[order]
     single = np.flatnonzero(n <= 1)
-    extent = s[single[0]] if len(single) else s[-1]
+    extent = s[single[0]] if len(single) else s.max(initial=0.0)  # no scales: no extent, and no fit
     keep = (s >= min_scale) & (s <= max_fraction * extent) & (n > 0)
     s, n = s[keep], n[keep]
     return _scaling_fit(np.log(s), np.log(n), s, _families(s), -1.0, min_decades=min_decades,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .analysis import summarise
+from .analysis import summarise, sweep_checked
 from .exact import exact_reference, method_axes
 from .params import EXACT_METHOD, PARAMETERS, SHORTCUTS, Status
 from .schema import config_dims, plain
@@ -44,7 +44,7 @@ class Readout:
     """
 
     def __init__(self, ds, summary=None):
-        self.ds = ds = with_selected_clusters(ds)
+        self.ds = ds = with_selected_clusters(sweep_checked(ds))
         self.s = summarise(ds) if summary is None else summary
         self.config_dims = config_dims(ds)
         self.params = [d for d in self.config_dims if d != "size"]

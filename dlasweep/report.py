@@ -57,11 +57,12 @@ def report(ds, outdir, progress=None) -> list:
             progress(k, len(steps) - 1, steps[k])
 
     out = Path(outdir)
-    for name in earlier_report(out):
+    earlier = earlier_report(out)
+    tell()
+    sweep = Readout(ds)  # before the folder is touched: a dataset that cannot be read leaves an earlier report whole
+    for name in earlier:
         (out / name).unlink()
     out.mkdir(parents=True, exist_ok=True)
-    tell()
-    sweep = Readout(ds)
     tell()
     written = [write_csv(sweep, out / TABLES[0]), write_table(sweep, out / TABLES[1])]
     figures = {}

@@ -74,6 +74,11 @@ def test_fit_refuses_sets_too_small_to_show_scaling(points, reason):
     assert not fit.ok and reason in fit.reason
 
 
+def test_an_empty_curve_is_refused_as_a_fit_not_an_error():
+    fit = fit_dimension([], [])
+    assert not fit.ok and np.isnan(fit.D) and "0 admissible points" in fit.reason
+
+
 def test_fit_refuses_a_curved_log_log_plot():
     scales = 2.0 ** (np.arange(41) / 4)
     x = np.log(scales)

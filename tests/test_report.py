@@ -117,6 +117,19 @@ def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
     assert "- stickiness=0.5 against stickiness=1.0: " in text and "cannot say whether resolved" not in text
 
 
+@pytest.mark.parametrize("not_a_sweep, error, message", [
+    ("sweep.nc", TypeError, "got str"),
+    (xr.Dataset({"x": ("particle", [0, 1])}), ValueError, "holds no sweep"),
+])
+def test_what_is_not_a_sweep_is_refused_and_an_earlier_report_stays_whole(tmp_path, not_a_sweep, error, message):
+    written = report(synthetic_sweep({"stickiness": [1.0, 0.5]}), tmp_path / "out")
+    before = {path.name: path.read_bytes() for path in written}
+    for call in (lambda: report(not_a_sweep, tmp_path / "out"), lambda: dla.summarise(not_a_sweep)):
+        with pytest.raises(error, match=f"^ds: .*{message}"):
+            call()
+    assert {path.name: path.read_bytes() for path in (tmp_path / "out").iterdir()} == before
+
+
 def test_report_tells_its_progress_step_by_step(tmp_path):
     calls = []
     report(synthetic_sweep({"stickiness": [1.0, 0.5]}), tmp_path / "out",
