@@ -16,7 +16,6 @@ import contextlib
 import dataclasses
 import os
 import sys
-import tempfile
 import time
 import traceback
 import warnings
@@ -30,6 +29,7 @@ from ._version import __version__
 from .bench_targets import MODELS as BENCH_MODELS
 from .params import one_line as _one_line
 from .parts import Interrupted, ResumeError
+from .paths import writable
 from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
 from .progress import follow, growth_bar, steps_bar
 from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
@@ -458,17 +458,10 @@ def _bench(args) -> int:
 
 def _check_writable(path: Path, folder=False):
     """Refuse, before any work, a target we could not write (``folder``: a folder to fill)."""
-    if path.exists() and path.is_dir() != folder:
-        raise UsageError(f"-o {path}: " + ("exists and is not a folder" if folder else "is a folder"))
-    parent = path if folder and path.is_dir() else path.parent
-    if not parent.is_dir():
-        raise UsageError(f"-o {path}: folder {parent} does not exist")
     try:
-        # A real attempt: permission bits say nothing for root or a read-only mount.
-        with tempfile.TemporaryFile(dir=parent):
-            pass
-    except OSError:
-        raise UsageError(f"-o {path}: folder {parent} is not writable") from None
+        writable(path, folder)
+    except OSError as err:
+        raise UsageError(f"-o {err}") from None
 
 
 def _check_new(path: Path, replace: bool, why=""):

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .paths import writable
+
 FORMATS = (".csv", ".ply", ".obj", ".svg")
 MESHES = ("spheres", "tubes")
 PICTURES = (".png", ".svg")
@@ -73,10 +75,12 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
     ValueError
         An unknown extension or mesh, or a cluster without parents where
         the format needs them (tubes, .svg, .csv); IndexError: no such
-        cluster. Nothing is written then.
+        cluster; OSError: a path that cannot be written (``paths.writable``).
+        Nothing is written then.
     """
     path = Path(path)
     check(path, mesh)
+    writable(path)
     if not hasattr(source, "points"):
         from .ragged import read_cluster  # here, so that exporting a grown cluster needs no xarray
 

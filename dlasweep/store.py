@@ -22,6 +22,7 @@ import xarray as xr
 from . import params as _params
 from ._version import __version__
 from .params import one_line
+from .paths import writable
 from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns,
                      ragged_dtype)
 
@@ -213,7 +214,7 @@ def save(ds: xr.Dataset, path, clusters=None) -> None:
         diffusion times and parents, in ``cluster`` order, written as they come.
         Default: ``ds``'s own per-particle variables, if any.
     """
-    path = Path(path)
+    path = writable(path)
     particle = [name for name, var in ds.variables.items() if var.dims == ("particle",)]
     columns = ragged_columns(ds["model"], ds["dim"]) if clusters is not None else {
         name: ds[name].dtype for name in particle}

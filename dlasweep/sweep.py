@@ -55,6 +55,7 @@ from .analysis import headline
 from .fit import growth_counts
 from .grow import STOP, compiled
 from .parts import PARTICLES, Parts, parts_folder
+from .paths import writable
 from .progress import Lines
 from .spec import Spec, load_spec
 from .task import error_result, measure_tasks, sweep_scales
@@ -120,9 +121,13 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     ResumeError
         When ``out``'s parts folder is from another spec, exists without
         ``resume``, or is locked by a running sweep; nothing is computed then.
+    OSError
+        When ``out`` cannot be written (``paths.writable``); nothing is computed then.
     """
     if not isinstance(spec, Spec):
         spec = load_spec(spec)
+    if out is not None:
+        writable(out)
     lines = progress is None and not sys.stderr.isatty()
     if progress is None:
         progress = sys.stderr.isatty()
