@@ -36,7 +36,7 @@ from .measure import radius_of_gyration, time_depth_pairs
 from .params import STATUSES
 from .ragged import cluster_points
 from .schema import config_dims, plain
-from .selection import with_selected_clusters
+from .selection import dataset_checked, with_selected_clusters
 
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
@@ -172,9 +172,7 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
 
 def sweep_checked(ds):
     """``ds`` when it is a sweep's Dataset, else one line naming it: a TypeError (not a Dataset) or a ValueError."""
-    if not isinstance(ds, xr.Dataset):
-        raise TypeError(f"ds: expected a sweep's xarray.Dataset (run_sweep, open_sweep), got {type(ds).__name__}")
-    if "box_count" not in ds or "n_grown" not in ds:
+    if "box_count" not in dataset_checked(ds) or "n_grown" not in ds:
         raise ValueError("ds: holds no sweep (no box_count or n_grown): one cluster from grow, or another dataset")
     return ds
 

@@ -12,7 +12,7 @@ import xarray as xr
 
 from . import params as _params
 from .schema import AXES, BOOLEAN, STATUS_FLAGS, StoreError
-from .selection import selected_clusters
+from .selection import dataset_checked, selected_clusters
 
 
 def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
@@ -104,8 +104,10 @@ def _index(ds, index, where) -> int:
     if (index is None) == (not where):
         raise TypeError("cluster: give either an index or parameter values")
     if index is None:
-        return _find_cluster(ds, where)
-    count = ds.sizes.get("cluster", 0)
+        return _find_cluster(dataset_checked(ds), where)
+    if not _params.is_integer(index):
+        raise TypeError(f"cluster: index {index!r} is not an integer")
+    count = dataset_checked(ds).sizes.get("cluster", 0)
     if not -count <= index < count:
         raise IndexError(f"cluster: index {index} is outside 0..{count - 1}")
     return int(index) % count

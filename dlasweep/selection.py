@@ -12,6 +12,13 @@ import numpy as np
 import xarray as xr
 
 
+def dataset_checked(ds) -> xr.Dataset:
+    """``ds`` when it is an xarray Dataset, else a TypeError naming it (a file is opened with ``open_sweep``)."""
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds: expected an xarray.Dataset (open_sweep, run_sweep), got {type(ds).__name__}")
+    return ds
+
+
 def selected_clusters(ds: xr.Dataset) -> np.ndarray:
     """Positions on ``cluster`` of the clusters that a selection on the grid keeps, in order.
 

@@ -26,3 +26,16 @@ def test_a_cluster_is_found_by_its_index_or_its_parameters():
         ragged.cluster_points(ds, colour="red")
     with pytest.raises(IndexError):
         ragged.cluster_points(ds, 99)
+    np.testing.assert_array_equal(ragged.cluster_points(ds, np.int64(k - len(counts))), expected)  # from the end
+
+
+@pytest.mark.parametrize("index", [1.5, "2", True])
+def test_an_index_that_is_not_an_integer_is_refused(index):
+    with pytest.raises(TypeError, match=f"^cluster: index {index!r} is not an integer$"):
+        ragged.read_cluster(synthetic_dataset(), index)
+
+
+def test_a_path_in_place_of_a_dataset_is_refused_naming_ds():
+    for where in ({"index": 0}, {"seed": 0}):
+        with pytest.raises(TypeError, match="^ds: expected an xarray.Dataset .*got str$"):
+            ragged.read_cluster("sweep.nc", **where)
