@@ -35,7 +35,7 @@ from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius
 from .measure import radius_of_gyration, time_depth_pairs
 from .params import STATUSES
 from .ragged import cluster_points
-from .schema import config_dims, plain
+from .schema import config_dims, is_sweep, plain
 from .selection import dataset_checked, with_selected_clusters
 
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
@@ -172,7 +172,7 @@ def summarise(ds, *, resamples: int = RESAMPLES) -> xr.Dataset:
 
 def sweep_checked(ds):
     """``ds`` when it is a sweep's Dataset, else one line naming it: a TypeError (not a Dataset) or a ValueError."""
-    if "box_count" not in dataset_checked(ds) or "n_grown" not in ds:
+    if not is_sweep(dataset_checked(ds)):
         raise ValueError("ds: holds no sweep (no box_count or n_grown): one cluster from grow, or another dataset")
     return ds
 

@@ -395,6 +395,7 @@ def _slurm(args) -> int:
 def _report(args) -> int:
     from . import store
     from .report import ReportFolderError, earlier_report, report
+    from .schema import is_sweep
 
     _check_dataset(args.dataset)
     outdir = args.output or args.dataset.with_suffix("")
@@ -404,7 +405,7 @@ def _report(args) -> int:
     except ReportFolderError as err:
         raise UsageError(f"-o {err}") from None
     ds = store.open_sweep(args.dataset)
-    if "box_count" not in ds:
+    if not is_sweep(ds):
         ds.close()
         raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
     try:

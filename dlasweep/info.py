@@ -19,7 +19,7 @@ from .measure import radius_of_gyration
 
 def lines(ds) -> list:
     """What ``info`` says of a dataset, by kind: a benchmark (dimension ``run``), a sweep, or one cluster."""
-    return _bench(ds) if "run" in ds.dims else _sweep(ds) if "box_count" in ds else _cluster(ds)
+    return _bench(ds) if "run" in ds.dims else _sweep(ds) if schema.is_sweep(ds) else _cluster(ds)
 
 
 def _sweep(ds) -> list:

@@ -169,6 +169,11 @@ def dims(name, axes) -> tuple:
     return tuple(d for dim in SCHEMA[name].dims for d in (axes if dim == _CONFIG else (dim,)))
 
 
+def is_sweep(ds) -> bool:
+    """Whether a dataset is a sweep's: its box counts at each count grown, not one cluster's from ``grow``."""
+    return "box_count" in ds and "n_grown" in ds
+
+
 def config_dims(ds) -> list:
     """The dims that name a configuration of a sweep ``ds``: the swept parameters (spec order), then ``size``."""
     return [d for d in ds["n_grown"].dims if d not in ("n_particles", "seed")]
