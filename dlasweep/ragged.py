@@ -101,13 +101,14 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
 
 def _index(ds, index, where) -> int:
     """The position on ``cluster`` that ``index`` or ``where`` names (``cluster_points``), checked."""
+    dataset_checked(ds)
     if (index is None) == (not where):
         raise TypeError("cluster: give either an index or parameter values")
     if index is None:
-        return _find_cluster(dataset_checked(ds), where)
+        return _find_cluster(ds, where)
     if not _params.is_integer(index):
         raise TypeError(f"cluster: index {index!r} is not an integer")
-    count = dataset_checked(ds).sizes.get("cluster", 0)
+    count = ds.sizes.get("cluster", 0)
     if not -count <= index < count:
         raise IndexError(f"cluster: index {index} is outside 0..{count - 1}")
     return int(index) % count
