@@ -350,8 +350,16 @@ def sweep_ratios(echo=print, sweeps=SWEEPS, threads: int = SWEEP_THREADS) -> dic
             figures.update({f"sweep_{name}_{key}": value for key, value in eff.items()})
             echo(f"  {seeds:>5} x {counts!s:<16} process {eff['process']:6.2f} s, kernels {eff['kernels']:6.2f} s, ideal "
                  f"{eff['ideal']:6.2f} s: ratio {eff['ratio']:4.2f}; target {eff['target']:6.2f} s "
-                 + ("met" if eff["process"] <= eff["target"] else f"over by {eff['process'] - eff['target']:.2f} s"))
+                 + shortfall(eff["process"], eff["target"]))
     return figures
+
+
+def shortfall(seconds: float, target: float) -> str:
+    """"met", or by how much ``seconds`` is over ``target``, never "over by 0.00 s"."""
+    over = seconds - target
+    if over <= 0:
+        return "met"
+    return f"over by {over:.2f} s" if over >= 0.005 else f"over by {over * 1000:.1g} ms"
 
 
 def _tiled_cluster(model: str, n: int = 100_000, tiles: int = 10) -> np.ndarray:

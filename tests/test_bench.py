@@ -221,3 +221,12 @@ def test_end_to_end_sets_a_sweep_and_its_report_against_the_growth(tmp_path):
                                                   "sweep_ratio": 1.04, "report_ratio": 1.36}) == (
         "lattice-2d 1e8 end to end: one-cluster sweep peak 2600 MB, 1.04x the growth's (<= 1.3: met); "
         "its report 3400 MB, 1.36x (<= 1.3: 5% over)")
+
+
+@pytest.mark.parametrize("seconds, target, said", [(3.0, 3.0, "met"), (2.5, 3.0, "met"), (4.16, 3.0, "over by 1.16 s"),
+                                                   (20.8416, 20.8400, "over by 2 ms")])
+def test_shortfall_never_reads_over_by_nothing(seconds, target, said):
+    """A sweep 1.6 ms over its target printed "over by 0.00 s" (bench --full, 2026-11-30)."""
+    from dlasweep.bench import shortfall
+
+    assert shortfall(seconds, target) == said
