@@ -92,7 +92,13 @@ TILE_BITS = (0, 0, 4, 3)
 """By dimension: words are stored in tiles of ``2**TILE_BITS`` words a side
 (2D 16x16 words, 128x128 sites, 2 KiB; 3D 8x8x8 words, 32**3 sites, 4 KiB),
 so that the words near a site share a few memory pages and a cluster
-touches the pages along it, not every row of the grid."""
+touches the pages along it, not every row of the grid. Within a tile the
+words lie row after row, a cache line 32x4x4 sites in 3D. Measured and not
+kept: 3D words in Morton order within the tile, a line 2x2x2 words (8**3
+sites), in which 18% fewer lines hold a particle at 3D lattice 1e6 (36.5
+thousand against 44.3): 3D lattice, seed 1, side by side with the cores
+swapped (the same clusters), 1e6 1.082 and 1.007 times the time, 1e7 1.033
+and 1.047."""
 
 
 @jit
