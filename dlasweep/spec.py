@@ -139,11 +139,11 @@ class Spec:
         for values in itertools.product(*self.axes.values(), self.sizes):
             yield dict(zip(names, values))
 
-    def tasks(self):
-        """Yield every ``Task`` in grid (C) order."""
+    def tasks(self, replicates=None):
+        """Yield every ``Task`` in grid (C) order; with ``replicates``, only each configuration's first that many."""
         indices = itertools.product(*(range(n) for n in self.shape[:-1]))
         for index, params in zip(indices, self._resolved):
-            for j, seed in enumerate(self.seeds):
+            for j, seed in enumerate(self.seeds[:replicates]):
                 yield Task(index + (j,), params, seed)
 
     @functools.cached_property

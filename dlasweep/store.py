@@ -27,7 +27,7 @@ from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, a
                      ragged_dtype)
 
 
-def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
+def to_dataset(spec, tasks, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
     """Assemble a sweep's results into the layout of README, "The dataset", clusters aside.
 
     The per-particle variables are added by ``with_clusters`` (in memory)
@@ -36,6 +36,7 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     Parameters
     ----------
     spec : dlasweep.spec.Spec
+    tasks : list of the stored clusters' ``dlasweep.spec.Task`` (``spec.stores``), in task (C) order
     scales : ndarray, (n_scales,)
     history : ndarray of int, (n_history,)
         Counts of the growth history (``fit.growth_counts``).
@@ -64,7 +65,6 @@ def to_dataset(spec, scales, history, science, cluster_particles, failed=()) -> 
     }
     fixed = {name: spec.resolved(name) for name in _params.DEFAULTS if name not in spec.axes and name != "size"}
     coords.update((name, ((), value)) for name, value in fixed.items())
-    tasks = [t for t in spec.tasks() if spec.stores(t)]
     for name in (*spec.axes, "size"):
         # of the axis's type, also when no cluster is stored
         coords[f"cluster_{name}"] = ("cluster", _coordinate([t.params[name] for t in tasks], coords[name][1].dtype))

@@ -136,9 +136,10 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     with parts_folder(spec, out, resume) as parts, contextlib.ExitStack() as session:
         batch, dask_client, stream = spec, None, None
         while True:
-            todo = [t for t in batch.tasks() if not parts.finished(t.key)]
+            tasks = list(batch.tasks())  # listed once a batch: 15 s for 1e7 clusters (``spec.MAX_TASKS``)
+            todo = [t for t in tasks if not parts.finished(t.key)]
             if out is not None:  # the batch's clusters go into the file as they finish
-                stream = _Stream(batch, parts, todo)
+                stream = _Stream(batch, tasks, parts, todo)
                 session.callback(stream.writer.discard)
             if todo:
                 if dask_client is None:
@@ -154,7 +155,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                             desc=spec.name, disable=not progress, file=sys.stderr))
                 with bar:
                     _compute(dask_client, batch, todo, parts, bar, stream)
-            ds, failed = _assemble(batch, parts)
+            ds, failed = _assemble(batch, tasks, parts)
             if spec.target_ci is not None:
                 half_width = _ci_half_width(ds)
                 more, reason = _more_seeds(spec, len(batch.seeds), half_width.values, failed)
@@ -166,7 +167,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                 ds = store.record_stop(ds, half_width, spec.target_ci, spec.max_seeds, reason)
             # The clusters go from the parts into the file (or memory) one part at a time.
             if out is None:
-                ds = store.with_clusters(ds, _clusters(batch, parts))
+                ds = store.with_clusters(ds, _clusters(batch, tasks, parts))
             else:
                 stream.feed()
                 stream.writer.finish(ds, out)
@@ -237,7 +238,7 @@ def _first_task_of_each_kernel(spec) -> dict:
     """(model name, dimension, lockstep walkers) -> the first task of the spec that grows it: each is a kernel of
     its own."""
     first = {}
-    for task in spec.tasks():
+    for task in spec.tasks(replicates=1):
         first.setdefault((task.params["model"], task.params["dim"], task.params["walkers"] > 1), task)
     return first
 
@@ -437,11 +438,10 @@ def _compute(client, spec, todo, parts, bar, stream=None):
             running.add(submit(batch))
 
 
-def _assemble(spec, parts):
-    """The dataset from every part, in one pass, without the clusters' positions (``_clusters``)."""
+def _assemble(spec, tasks, parts):
+    """The dataset from the parts of ``tasks`` (``spec.tasks()``), in one pass, clusters aside (``_clusters``)."""
     scales = sweep_scales(spec)
     history = growth_counts(spec.counts)
-    tasks = list(spec.tasks())
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
     science = {name: schema.blank(name, shapes.get(name, grid)) for name in (*schema.SCIENCE, "wall_time")}
@@ -452,6 +452,7 @@ def _assemble(spec, parts):
         each = table[name].reshape(*spec.shape, *table[name].shape[1:])
         values[...] = each if name == "radius_gyration_history" else np.moveaxis(each, len(spec.shape) - 1,
                                                                                    len(spec.shape))
+    stored = [task for task in tasks if spec.stores(task)]
     sizes = [int(shape[0]) for task, shape in zip(tasks, table["points.shape"]) if spec.stores(task)]
     failed = [(task.key, str(error)) for task, error in zip(tasks, table["error"]) if str(error)]
 
@@ -459,15 +460,14 @@ def _assemble(spec, parts):
     fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)
     top = int(np.argmax(fits)) if fits.any() else len(scales) - 1
     science["box_count"] = science["box_count"][..., : top + 1]
-    return store.to_dataset(spec, scales[: top + 1], history, science, sizes, failed), failed
+    return store.to_dataset(spec, stored, scales[: top + 1], history, science, sizes, failed), failed
 
 
 class _Stream:
     """A spec's stored clusters written into its file (``store.ParticleWriter``, in the parts
     folder until the end) in cluster order, each once it and all before it have finished."""
 
-    def __init__(self, spec, parts, todo):
-        tasks = list(spec.tasks())
+    def __init__(self, spec, tasks, parts, todo):
         self.parts, self.next, self.pending = parts, 0, {task.key for task in todo}
         self.keys = [task.key for task in tasks if spec.stores(task)]
         columns = schema.ragged_columns([t.params["model"] for t in tasks], [t.params["dim"] for t in tasks])
@@ -492,8 +492,9 @@ class _Stream:
         self.next += len(ready)
 
 
-def _clusters(spec, parts):
-    """Points, diffusion times and parents of each stored cluster, in order, read from the parts one part at a time."""
-    stored = (t.key for t in spec.tasks() if spec.stores(t))
+def _clusters(spec, tasks, parts):
+    """Points, diffusion times and parents of each stored cluster (``tasks``: ``spec.tasks()``), in order, read from
+    the parts one part at a time."""
+    stored = (t.key for t in tasks if spec.stores(t))
     for result in parts.results(stored, Parts.PER_PARTICLE):
         yield tuple(result[name] for name in Parts.PER_PARTICLE)

@@ -210,7 +210,7 @@ def test_the_stream_writes_a_finished_cluster_from_memory_and_a_later_one_from_i
 
     monkeypatch.setattr(Parts, "results", spy)
     parts = Parts(tmp_path)
-    stream = _Stream(spec, parts, list(spec.tasks()))
+    stream = _Stream(spec, list(spec.tasks()), parts, list(spec.tasks()))
     first, second, third = (t.key for t in tasks)
     for keys, expected_reads in (([first], []), ([third], []), ([second], [third])):
         finished = {key: results[key] for key in keys}

@@ -164,3 +164,12 @@ def test_every_integer_is_bounded_by_what_can_run(line, message):
     with pytest.raises(SpecError) as caught:
         parse_spec("[grid]\n" + line + "\n")
     assert str(caught.value).startswith(message), str(caught.value)
+
+
+def test_the_first_replicates_of_each_configuration():
+    """``tasks(replicates=k)``: each configuration's first k tasks of the whole listing, not the whole grid's."""
+    spec = parse_spec(TINY_SPEC)
+    every, seeds = list(spec.tasks()), len(spec.seeds)
+    assert seeds > 1
+    assert list(spec.tasks(replicates=1)) == every[::seeds]
+    assert list(spec.tasks(replicates=2)) == [t for t in every if t.index[-1] < 2]

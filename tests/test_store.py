@@ -52,7 +52,7 @@ def synthetic_parts(spec_text=SPEC, failed=()):
     sizes = rng.integers(0, 9, len(stored))
     clusters = [(rng.normal(size=(n, 2)), rng.integers(0, 50, n), (rng.random(n) * np.arange(n)).astype(np.int32) - 1)
                 for n in sizes]
-    return store.to_dataset(spec, scales, history, science, sizes, failed), clusters
+    return store.to_dataset(spec, stored, scales, history, science, sizes, failed), clusters
 
 
 def synthetic_dataset(spec_text=SPEC, failed=()):

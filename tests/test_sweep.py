@@ -193,6 +193,26 @@ def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, m
     assert files_under(tmp_path) == {Path("t.nc")}
 
 
+def test_a_sweep_lists_its_tasks_once(tmp_path, dask_client, monkeypatch, reference):
+    """The grid is listed once, not for the work to do, the file's stream, the dataset and the clusters
+    each: 15 s a listing at ``spec.MAX_TASKS`` clusters, three before a 1e7-cluster sweep's plan line."""
+    from dlasweep.spec import Spec
+
+    listings, tasks = [], Spec.tasks
+
+    def listed(self, replicates=None):
+        listings.extend([self.name] if replicates is None else [])
+        return tasks(self, replicates)
+
+    monkeypatch.setattr(Spec, "tasks", listed)
+    for out in (tmp_path / "t.nc", None):
+        listings.clear()
+        ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
+        assert len(listings) == 1
+        xr.testing.assert_identical(science(ds), science(reference))
+        ds.close()
+
+
 def test_the_embedded_cluster_shortens_the_switch_interval_and_restores_it(monkeypatch):
     before, during = sys.getswitchinterval(), []
     growth_counts = worker.growth_counts
