@@ -194,8 +194,8 @@ def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, m
 
 
 def test_a_sweep_lists_its_tasks_once(tmp_path, dask_client, monkeypatch, reference):
-    """The grid is listed once, not for the work to do, the file's stream, the dataset and the clusters
-    each: 15 s a listing at ``spec.MAX_TASKS`` clusters, three before a 1e7-cluster sweep's plan line."""
+    """The grid is listed once, not once each for the work to do, the file's stream, the dataset, its stored
+    clusters and the clusters read back: 15 s a listing at ``spec.MAX_TASKS`` clusters."""
     from dlasweep.spec import Spec
 
     listings, tasks = [], Spec.tasks
