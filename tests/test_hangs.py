@@ -229,15 +229,17 @@ def test_a_ctrl_c_that_netcdf_would_swallow_while_a_file_is_read_is_raised_once_
 
 
 def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
-    (tmp_path / "long.toml").write_text("[grid]\nn_particles = [300000]\nseeds = 4\n")
+    # Clusters of 1e6, 2 s each on the fastest host yet: of 3e5, on 2026-11-30, all four had finished when
+    # the interrupt came after 4 CPU seconds ("4/4 clusters finished"), so the sweep was not interrupted.
+    (tmp_path / "long.toml").write_text("[grid]\nn_particles = [1000000]\nseeds = 4\n")
     status, err, seconds = interrupt(["sweep", "long.toml", "-o", "long.nc"], tmp_path)
     lines = err.splitlines()
     assert status == 130 and lines[-1].startswith("dlasweep sweep: interrupted"), err
-    # before it only the plan (2 copies of 1.2e6 particles of 16 bytes on disk; the memory depends on the
+    # before it only the plan (2 copies of 4e6 particles of 16 bytes on disk; the memory depends on the
     # cores) and progress lines: on a busy machine the interrupt may come before the plan, on a quiet one
-    # after a cluster (about a second) finished
-    plan = (r"dlasweep sweep: plan: 4 clusters, 1,200,000 particles \(1,200,000 stored\); "
-            r"about [\d.]+ MB of memory, 38.4 MB of disk")
+    # after a cluster finished
+    plan = (r"dlasweep sweep: plan: 4 clusters, 4,000,000 particles \(4,000,000 stored\); "
+            r"about [\d.]+ MB of memory, 128.0 MB of disk")
     assert all(re.fullmatch(plan, line) for line in lines[:-1][:1]), err
     assert all(re.match(r"long \d\d:\d\d:\d\d: [1-3]/4 clusters finished", line) for line in lines[1:-1]), err
     assert seconds < INTERRUPTED_WITHIN and not (tmp_path / "long.nc").exists()
