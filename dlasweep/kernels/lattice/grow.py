@@ -37,7 +37,9 @@ to 48.0 a particle), and Brownian jumps after Brownian jumps for 10.1k (4.0 to 2
 to 523 cycles). A read that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140
 to 180 beyond 4 to 8 MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB
 of written cache lines: the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
-23.0 at 1e7 (words 12.8, field and pyramid 10.2). Reads that wait on one another are not what
+23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,
+level-1 words 6.3, field 10.5, pyramid 2.3), beyond a last-level cache of 32 MiB: on a host whose
+cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. Reads that wait on one another are not what
 grows: the field's cell and the level-1 word of the walker's site prefetched (``llvm.prefetch``)
 before the pyramid's read, so that the three overlap, took 0.99 times the time at 3D 1e6 (16 pairs
 side by side, seed 1, the same clusters: 0.84 to 1.21 times pair by pair, standard error 0.02) and
