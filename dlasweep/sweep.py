@@ -452,14 +452,15 @@ def _assemble(spec, tasks, parts):
         each = table[name].reshape(*spec.shape, *table[name].shape[1:])
         values[...] = each if name == "radius_gyration_history" else np.moveaxis(each, len(spec.shape) - 1,
                                                                                    len(spec.shape))
-    stored = [task for task in tasks if spec.stores(task)]
-    sizes = [int(shape[0]) for task, shape in zip(tasks, table["points.shape"]) if spec.stores(task)]
+    stores = [spec.stores(task) for task in tasks]
+    sizes = [int(shape[0]) for shape in itertools.compress(table["points.shape"], stores)]
     failed = [(task.key, str(error)) for task, error in zip(tasks, table["error"]) if str(error)]
 
     # Keep scales up to the first at which every cluster fits in one box.
     fits = (science["box_count"] <= 1).reshape(-1, len(scales)).all(axis=0)
     top = int(np.argmax(fits)) if fits.any() else len(scales) - 1
     science["box_count"] = science["box_count"][..., : top + 1]
+    stored = list(itertools.compress(tasks, stores))
     return store.to_dataset(spec, stored, scales[: top + 1], history, science, sizes, failed), failed
 
 
@@ -493,8 +494,7 @@ class _Stream:
 
 
 def _clusters(spec, tasks, parts):
-    """Points, diffusion times and parents of each stored cluster (``tasks``: ``spec.tasks()``), in order, read from
-    the parts one part at a time."""
+    """Points, diffusion times and parents of each stored cluster of ``tasks``, in order, read one part at a time."""
     stored = (t.key for t in tasks if spec.stores(t))
     for result in parts.results(stored, Parts.PER_PARTICLE):
         yield tuple(result[name] for name in Parts.PER_PARTICLE)
