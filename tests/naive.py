@@ -239,14 +239,17 @@ def min_pair(points, params):
     return cKDTree(p).query(p, k=2)[0][:, 1].min()
 
 
-def field_distances(field, dim, fw, cap):
+def field_distances(field, dim, fw, cap, packed=False):
     """The distances a kernel's distance field (``maps.field_cell``'s tiles,
-    ``cap - distance`` stored) holds, as an array of ``fw`` cells a side, axes in order."""
+    ``cap - distance`` stored; ``packed``: two cells a byte, the even one in the low
+    four bits) holds, as an array of ``fw`` cells a side, axes in order."""
     from dlasweep.kernels import maps
 
     out = np.zeros((fw,) * dim, np.int64)
     for c in np.ndindex(*out.shape):
-        out[c] = cap - int(field[maps.field_cell(dim, fw, *c, *([0] * (3 - dim)))])
+        cell = maps.field_cell(dim, fw, *c, *([0] * (3 - dim)))
+        value = (int(field[cell // 2]) >> (4 * (cell % 2))) % 16 if packed else int(field[cell])
+        out[c] = cap - value
     return out
 
 

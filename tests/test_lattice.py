@@ -252,7 +252,7 @@ def test_the_field_holds_capped_cell_distances(dim, width, fill):
             held[maps.field_tile(dim, fw, *cell)] = 1
         if fill == "fill":
             maps.field_fill(field, dim, fw, cap, held)
-        got = naive.field_distances(field, dim, fw, cap)
+        got = naive.field_distances(field, dim, fw, cap, maps.FIELD_PACKED[dim])
         assert (got == _level_distances(pts, dim, width, shift, cap)).all()
 
 
@@ -281,7 +281,7 @@ def test_a_filled_field_skips_only_tiles_beyond_reach(dim):
         if reach == 1:
             assert held.sum() < len(held) - 3 ** dim  # some tiles lie beyond every held one's reach
             maps.field_fill(field, dim, fw, cap, held)
-        fields.append(naive.field_distances(field, dim, fw, cap))
+        fields.append(naive.field_distances(field, dim, fw, cap, maps.FIELD_PACKED[dim]))
     assert (fields[0] == fields[1]).all()
     assert (fields[0] < cap).sum() > 0
 

@@ -39,7 +39,8 @@ to 180 beyond 4 to 8 MiB (``dlasweep.host``). The 3D grids about a cluster of 1e
 of written cache lines: the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
 23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,
 level-1 words 6.3, field 10.5, pyramid 2.3), beyond a last-level cache of 32 MiB: on a host whose
-cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. Reads that wait on one another are not what
+cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. The
+field packed two cells a byte (``maps.FIELD_PACKED``) spans 5.5 MiB at 1e7. Reads that wait on one another are not what
 grows: the field's cell and the level-1 word of the walker's site prefetched (``llvm.prefetch``)
 before the pyramid's read, so that the three overlap, took 0.99 times the time at 3D 1e6 (16 pairs
 side by side, seed 1, the same clusters: 0.84 to 1.21 times pair by pair, standard error 0.02) and
@@ -237,7 +238,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 if far < FAR_CLEAR[dim]:
                     ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
                     ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
-                    cell = cap - np.int64(field[maps.field_cell(dim, fw0, ci, cj, ck)])
+                    at, shift = maps.field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
+                    cell = cap - ((np.int64(field[at]) >> shift) & maps.FIELD_MASK[dim])
                     if cell < cap:
                         far = 0.0
                     elif not from_far and len(levels) > 2:

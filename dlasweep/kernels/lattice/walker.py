@@ -233,7 +233,8 @@ def distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, 
         if far < FAR_CLEAR[dim]:
             ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
             ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
-            cell = cap - np.int64(field[maps.field_cell(dim, fw0, ci, cj, ck)])
+            at, shift = maps.field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
+            cell = cap - ((np.int64(field[at]) >> shift) & maps.FIELD_MASK[dim])
             if cell < cap:
                 far = 0.0
             elif not from_far and len(levels) > 2:

@@ -48,7 +48,7 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
                 if len(held) > 0:
                     held[maps.field_tile(dim, fw, ci, cj, ck)] = 1
                 # a held cell has its distances marked already
-                if field[maps.field_cell(dim, fw, ci, cj, ck)] != FIELD_CAP[dim]:
+                if maps.field_value(field, dim, maps.field_cell(dim, fw, ci, cj, ck)) != FIELD_CAP[dim]:
                     pyramid_lower(field, dim, width, i, j, k, levels)
                     maps.field_lower(field, dim, fw, FIELD_CAP[dim], cap, ci, cj, ck)
 
@@ -115,7 +115,7 @@ def regrow(points, count, dim, width, off, period, old):
         for level in range(2):
             maps.carry(o_field[o_levels[level]:o_levels[level + 1]], o_sides[level],
                        field[levels[level]:levels[level + 1]], sides[level], maps.FIELD_TILE[dim],
-                       shift >> (maps.FIELD_SHIFT + step * level), dim)
+                       shift >> (maps.FIELD_SHIFT + step * level), dim, level == 0 and maps.FIELD_PACKED[dim])
     # every whole page, those the segments and levels share too: not held beside the new grid
     maps.release(o_words, 0, len(o_words) * o_words.itemsize)
     maps.release(o_field, 0, len(o_field))
