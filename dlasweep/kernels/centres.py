@@ -350,7 +350,10 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     does not: its circle jumps where the pyramid's bound reached farthest,
     made such exits (seed 1, side by side), took 43.2 steps a particle against
     45.2 at 2D 1e7 in 1.072 times the time, 107.2 against 116.1 at 3D 1e7 in
-    1.108 times. Measured and not done (2D
+    1.108 times; again with the field packed (``maps.FIELD_PACKED``; side by side, the
+    cores swapped), 3D 1e5 85.1 against 86.3 in 1.064 and 1.039 times, 1e6 94.8 against
+    99.8 in 1.025 and 1.035, 1e7 107.2 in 0.999 and 1.070: an exit costs more than the
+    jumps it saves. Measured and not done (2D
     lattice, side by side): the largest such disk of the 5x5 cells about X's
     took 31.7 steps a particle at 1e5 against 34.6, and 1.05 to 1.28 times the
     time at 1e6 (6 seeds); the disk of the cell two cells up the pyramid's
