@@ -257,6 +257,24 @@ def test_the_field_holds_capped_cell_distances(dim, width, fill):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
+def test_a_packed_field_takes_half_its_level(dim):
+    """The field is packed (``maps.FIELD_PACKED``) wherever its cap fits the halves' maximum
+    (below 8: 3D), and there a grown cluster's field writes only the first half of its level's
+    bytes, the second half never (pages that cost no memory); elsewhere the whole level."""
+    pts = dla.grow(20_000, seed=3, model="lattice", dim=dim).points.astype(np.int64)
+    width = 2 * (int(np.abs(pts).max()) + 8) // 16 * 16 + 32
+    field = rebuild(pts, len(pts), dim, width, width // 2, 0)[4]
+    level = field[:maps.pyramid_starts(dim, width, FIELD_CAP[dim])[1]]
+    first, second = np.count_nonzero(level[:len(level) // 2]), np.count_nonzero(level[len(level) // 2:])
+    assert first > 1000
+    assert maps.FIELD_PACKED[dim] == (FIELD_CAP[dim] < 8)
+    if maps.FIELD_PACKED[dim]:
+        assert second == 0
+    else:
+        assert second > 1000
+
+
+@pytest.mark.parametrize("dim", [2, 3])
 def test_a_filled_field_skips_only_tiles_beyond_reach(dim):
     """On a grid of 6 tiles a side whose particles lie in a corner, along one
     edge and alone near the corner of an inner tile (``field_fill`` visits only
