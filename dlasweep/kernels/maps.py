@@ -317,9 +317,10 @@ def _pair_rows():
     rows = np.zeros((8, 8, 2, 8), np.uint8)
     for cap, dj, par, j in np.ndindex(rows.shape):
         if dj < cap:
-            # the byte's two cells, from the particle's cell less the reach
-            value = [cap - max(dj, abs(k - cap + 1)) if 0 <= k <= 2 * cap - 2 else 0 for k in (2 * j + par - 1, 2 * j + par)]
-            rows[cap, dj, par, j] = value[0] | (value[1] << 4)
+            # the byte's two cells, counted from the particle's cell less the reach
+            low, high = [cap - max(dj, abs(k - cap + 1)) if 0 <= k <= 2 * cap - 2 else 0
+                         for k in (2 * j + par - 1, 2 * j + par)]
+            rows[cap, dj, par, j] = low | (high << 4)
     return rows.reshape(-1)
 
 
@@ -390,7 +391,7 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
             while a <= ahi:
                 end = min(ahi, a | last)
                 fb = np.uint64(field_cell(dim, fw, a, b, c))
-                if FIELD_PACKED[dim] and reach < cap - 1:  # a rebuild's own cells (``field_fill``)
+                if reach < cap - 1:  # a rebuild's own cells (``field_fill``): a cell a row
                     for x in range(a, end + 1):
                         field_raise(field, dim, fb + np.uint64(x - a), cap - max(dj, abs(x - ci)))
                 elif FIELD_PACKED[dim]:
