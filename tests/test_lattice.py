@@ -20,6 +20,7 @@ from dlasweep.kernels.lattice.exits import (
     unit_moves,
 )
 from dlasweep.kernels.walk import seed_stream
+from dlasweep.kernels.lattice.field import FIELD_PACKED, field_fill, field_lower
 from dlasweep.kernels.lattice.walker import distance_bound, release
 from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild, regrow
 from dlasweep.kernels.model import GRID_GROWTH
@@ -248,17 +249,17 @@ def test_the_field_holds_capped_cell_distances(dim, width, fill):
         held = np.zeros(maps.field_tile(dim, fw, fw - 1, fw - 1, fw - 1) + 1, np.uint8)
         for p in pts:
             cell = [x >> shift for x in p]
-            maps.field_lower(field, dim, fw, cap, cap if fill == "mark" else 1, *cell)
+            field_lower(field, dim, fw, cap, cap if fill == "mark" else 1, *cell)
             held[maps.field_tile(dim, fw, *cell)] = 1
         if fill == "fill":
-            maps.field_fill(field, dim, fw, cap, held)
-        got = naive.field_distances(field, dim, fw, cap, maps.FIELD_PACKED[dim])
+            field_fill(field, dim, fw, cap, held)
+        got = naive.field_distances(field, dim, fw, cap, FIELD_PACKED[dim])
         assert (got == _level_distances(pts, dim, width, shift, cap)).all()
 
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_packed_field_takes_half_its_level(dim):
-    """The field is packed (``maps.FIELD_PACKED``) wherever its cap fits the halves' maximum
+    """The field is packed (``FIELD_PACKED``) wherever its cap fits the halves' maximum
     (below 8: 3D), and there a grown cluster's field writes only the first half of its level's
     bytes, the second half never (pages that cost no memory); elsewhere the whole level."""
     pts = dla.grow(20_000, seed=3, model="lattice", dim=dim).points.astype(np.int64)
@@ -267,8 +268,8 @@ def test_a_packed_field_takes_half_its_level(dim):
     level = field[:maps.pyramid_starts(dim, width, FIELD_CAP[dim])[1]]
     first, second = np.count_nonzero(level[:len(level) // 2]), np.count_nonzero(level[len(level) // 2:])
     assert first > 1000
-    assert maps.FIELD_PACKED[dim] == (FIELD_CAP[dim] < 8)
-    if maps.FIELD_PACKED[dim]:
+    assert FIELD_PACKED[dim] == (FIELD_CAP[dim] < 8)
+    if FIELD_PACKED[dim]:
         assert second == 0
     else:
         assert second > 1000
@@ -294,12 +295,12 @@ def test_a_filled_field_skips_only_tiles_beyond_reach(dim):
         held = np.zeros(maps.field_tile(dim, fw, fw - 1, fw - 1, fw - 1) + 1, np.uint8)
         for p in np.concatenate([corner, edge, inner]):
             cell = [int(x) >> shift for x in p] + [0] * (3 - dim)
-            maps.field_lower(field, dim, fw, cap, reach, *cell)
+            field_lower(field, dim, fw, cap, reach, *cell)
             held[maps.field_tile(dim, fw, *cell)] = 1
         if reach == 1:
             assert held.sum() < len(held) - 3 ** dim  # some tiles lie beyond every held one's reach
-            maps.field_fill(field, dim, fw, cap, held)
-        fields.append(naive.field_distances(field, dim, fw, cap, maps.FIELD_PACKED[dim]))
+            field_fill(field, dim, fw, cap, held)
+        fields.append(naive.field_distances(field, dim, fw, cap, FIELD_PACKED[dim]))
     assert (fields[0] == fields[1]).all()
     assert (fields[0] < cap).sum() > 0
 

@@ -67,7 +67,7 @@ cells: with it, 207 steps a particle at 3D 1e5 and 79 at 2D 1e5, with the
 exact nearest distance in its place (a measurement, not a kernel) 115 and
 47, with this field 124 and 54. Caps measured (``GRID_GROWTH`` 2.0): 2D 1e6
 6, 8, 11: 6.25, 5.97, 6.33 s; 3D 1e5 3, 4, 6: 2.87, 2.72, 3.06 s. Its bytes hold values to 255,
-so it is not packed as the lattice's field is (``maps.FIELD_PACKED``), and its size tells less:
+so it is not packed as the lattice's field is (``lattice.field.FIELD_PACKED``), and its size tells less:
 the field and the pyramid stored in two bytes a cell, 3D off-lattice 1e6 took 1.043 and 1.031
 times the time, 3e6 1.059 and 1.013 (seed 1, side by side, the cores swapped), where the 3D
 lattice took 1.08 and 1.06 at 1e6."""
@@ -157,7 +157,7 @@ def _lower_rows(field, dim, fw, rows, cap, shift, i, j, k):
     ``2**shift`` times finer: each cell within ``cap - 1`` takes the maximum of
     its value and the row table's (``rows``, by the place of (i, j, k) in its
     cell). Each row is a stretch of the table taken by a branch-free maximum
-    the compiler vectorises (unsigned indices, as in ``maps.field_lower``), a
+    the compiler vectorises (unsigned indices, as in ``lattice.field.field_lower``), a
     tile's stretch at a time."""
     reach, span = cap - 1, 2 * cap - 1
     m = (1 << shift) - 1
@@ -354,7 +354,7 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     does not: its circle jumps where the pyramid's bound reached farthest,
     made such exits (seed 1, side by side), took 43.2 steps a particle against
     45.2 at 2D 1e7 in 1.072 times the time, 107.2 against 116.1 at 3D 1e7 in
-    1.108 times; again with the field packed (``maps.FIELD_PACKED``; side by side, the
+    1.108 times; again with the field packed (``lattice.field.FIELD_PACKED``; side by side, the
     cores swapped), 3D 1e5 85.1 against 86.3 in 1.064 and 1.039 times, 1e6 94.8 against
     99.8 in 1.025 and 1.035, 1e7 107.2 in 0.999 and 1.070: an exit costs more than the
     jumps it saves. Measured and not done (2D

@@ -40,7 +40,7 @@ of written cache lines: the words 3.5, the field and the pyramid 1.5; the 2D one
 23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,
 level-1 words 6.3, field 10.5, pyramid 2.3), beyond a last-level cache of 32 MiB: on a host whose
 cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. The
-field packed two cells a byte (``maps.FIELD_PACKED``) spans 5.5 MiB at 1e7. Reads that wait on one another are not what
+field packed two cells a byte (``field.FIELD_PACKED``) spans 5.5 MiB at 1e7. Reads that wait on one another are not what
 grows: the field's cell and the level-1 word of the walker's site prefetched (``llvm.prefetch``)
 before the pyramid's read, so that the three overlap, took 0.99 times the time at 3D 1e6 (16 pairs
 side by side, seed 1, the same clusters: 0.84 to 1.21 times pair by pair, standard error 0.02) and
@@ -58,6 +58,7 @@ from ..centres import pyramid_dist
 from ..model import STEPS_DTYPE, checkpoint, grown, lockstep_flag, model_from, sticks_xo
 from ..walk import return_to_plane, return_to_sphere, seed_stream, xdir, xo
 from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
+from .field import FIELD_MASK, field_place
 from .lockstep import grow_in_lockstep
 from .parents import lattice_parents
 from .walker import FAR_CLEAR, attach, near_walk, outside, release, site
@@ -238,8 +239,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 if far < FAR_CLEAR[dim]:
                     ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
                     ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
-                    at, shift = maps.field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
-                    cell = cap - ((np.int64(field[at]) >> shift) & maps.FIELD_MASK[dim])
+                    at, shift = field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
+                    cell = cap - ((np.int64(field[at]) >> shift) & FIELD_MASK[dim])
                     if cell < cap:
                         far = 0.0
                     elif not from_far and len(levels) > 2:

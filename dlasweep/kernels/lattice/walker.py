@@ -12,6 +12,7 @@ from .. import maps
 from ..centres import pyramid_dist
 from ..model import GRID_GROWTH, diffusion_time, sticks_xo
 from ..walk import below, direction, uniform, xo
+from .field import FIELD_MASK, field_place
 from .words import FIELD_CAP, fine2, fine3, in_contact, mark_images, occupied, site_word, word_at
 
 FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
@@ -233,8 +234,8 @@ def distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, 
         if far < FAR_CLEAR[dim]:
             ck = k >> maps.FIELD_SHIFT if dim == 3 else 0
             ci, cj = i >> maps.FIELD_SHIFT, j >> maps.FIELD_SHIFT
-            at, shift = maps.field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
-            cell = cap - ((np.int64(field[at]) >> shift) & maps.FIELD_MASK[dim])
+            at, shift = field_place(dim, maps.field_cell(dim, fw0, ci, cj, ck))
+            cell = cap - ((np.int64(field[at]) >> shift) & FIELD_MASK[dim])
             if cell < cap:
                 far = 0.0
             elif not from_far and len(levels) > 2:

@@ -3,7 +3,7 @@ exact Chebyshev distances a few sites out from whole 64-bit words.
 
 The grid is ``maps``' (segment 0 a bit per site, 8x8 or 4x4x4 sites per
 word, then dilated level 1, which tells a walker within two sites) with a
-coarse Chebyshev distance field beside it (``maps.field_lower``), and above
+coarse Chebyshev distance field beside it (``field.field_lower``), and above
 the field the centre pyramid (``centres.pyramid_lower``) in the same array; a
 site q of the lattice is cell q + ``off`` of the grid, whose side is
 ``width``. A substrate's periodic images are marked too. A grid is built
@@ -16,6 +16,7 @@ import numpy as np
 from ..._jit import jit
 from .. import maps
 from ..centres import FCAP, level_lower, levels_from_held, pyramid_lower
+from .field import FIELD_PACKED, field_fill, field_lower, field_value
 
 FIELD_CAP = (0, 0, 16, 6)
 """By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
@@ -28,7 +29,7 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
     """Mark a particle at site q, with its periodic images for substrates.
 
     ``cap`` 1 marks only the particle's own cell of the distance field (for
-    ``maps.field_fill`` to complete, flagging its tiles in ``held``; growth
+    ``field.field_fill`` to complete, flagging its tiles in ``held``; growth
     passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly
     held is recorded in the centre pyramid above the field.
     """
@@ -48,9 +49,9 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
                 if len(held) > 0:
                     held[maps.field_tile(dim, fw, ci, cj, ck)] = 1
                 # a held cell has its distances marked already
-                if maps.field_value(field, dim, maps.field_cell(dim, fw, ci, cj, ck)) != FIELD_CAP[dim]:
+                if field_value(field, dim, maps.field_cell(dim, fw, ci, cj, ck)) != FIELD_CAP[dim]:
                     pyramid_lower(field, dim, width, i, j, k, levels)
-                    maps.field_lower(field, dim, fw, FIELD_CAP[dim], cap, ci, cj, ck)
+                    field_lower(field, dim, fw, FIELD_CAP[dim], cap, ci, cj, ck)
 
 
 @jit
@@ -64,7 +65,7 @@ def rebuild(points, count, dim, width, off, period):
         for a in range(dim):
             q[a] = points[p, a]
         mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 1, held)
-    maps.field_fill(field, dim, fw, FIELD_CAP[dim], held)
+    field_fill(field, dim, fw, FIELD_CAP[dim], held)
     return words, start, blocks, cells, field
 
 
@@ -115,7 +116,7 @@ def regrow(points, count, dim, width, off, period, old):
         for level in range(2):
             maps.carry(o_field[o_levels[level]:o_levels[level + 1]], o_sides[level],
                        field[levels[level]:levels[level + 1]], sides[level], maps.FIELD_TILE[dim],
-                       shift >> (maps.FIELD_SHIFT + step * level), dim, level == 0 and maps.FIELD_PACKED[dim])
+                       shift >> (maps.FIELD_SHIFT + step * level), dim, level == 0 and FIELD_PACKED[dim])
     # every whole page, those the segments and levels share too: not held beside the new grid
     maps.release(o_words, 0, len(o_words) * o_words.itemsize)
     maps.release(o_field, 0, len(o_field))
@@ -134,7 +135,7 @@ def regrow(points, count, dim, width, off, period, old):
         ci, cj = (g[0] + shift) >> maps.FIELD_SHIFT, (g[1] + shift) >> maps.FIELD_SHIFT
         ck = (g[2] + shift) >> maps.FIELD_SHIFT if dim == 3 else 0
         if edge0:
-            maps.field_lower(field, dim, sides[0], cap, cap, ci, cj, ck)
+            field_lower(field, dim, sides[0], cap, cap, ci, cj, ck)
         if edge1:
             level_lower(level1, dim, sides[1], ci, cj, ck)
     levels_from_held(field, levels, width, dim)
