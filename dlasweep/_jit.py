@@ -21,7 +21,9 @@ are not affected.
 import time
 import warnings
 
+import llvmlite.ir
 import numba
+import numba.core.cgutils
 import numba.extending
 import numpy as np
 from numba.core.errors import NumbaPendingDeprecationWarning
@@ -87,6 +89,26 @@ def _address(typingctx, array):
         data = context.make_array(array)(context, builder, args[0]).data
         return builder.bitcast(data, context.get_value_type(numba.types.voidptr))
     return numba.types.voidptr(array), codegen
+
+
+@numba.extending.intrinsic
+def prefetch(typingctx, array, index):
+    """Ask the processor to bring the cache line of ``array[index]`` (its row, for a 2D array) in
+    while other work goes on: a hint (``llvm.prefetch``) that reads nothing and never faults."""
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, args[0])
+        zero = context.get_constant(numba.types.intp, 0)
+        where = numba.core.cgutils.get_item_pointer(context, builder, aryty, ary, [args[1]] + [zero] * (aryty.ndim - 1),
+                                                    wraparound=False)
+        i8 = llvmlite.ir.IntType(8).as_pointer()
+        i32 = llvmlite.ir.IntType(32)
+        hint = numba.core.cgutils.get_or_insert_function(
+            builder.module, llvmlite.ir.FunctionType(llvmlite.ir.VoidType(), [i8, i32, i32, i32]), "llvm.prefetch.p0")
+        # a read (0), kept in every cache level (3), of data (1)
+        builder.call(hint, [builder.bitcast(where, i8), i32(0), i32(3), i32(1)])
+        return context.get_dummy_value()
+    return numba.types.void(array, index), codegen
 
 
 @jit

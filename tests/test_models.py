@@ -286,6 +286,29 @@ def test_the_kernels_clock_reads_the_monotonic_clock():
     assert before <= now <= after
 
 
+def test_prefetch_is_a_hint_that_changes_nothing():
+    """``_jit.prefetch`` compiles for the arrays the kernels hint at (1D, and rows of 2D ones, to their
+    last element) and neither writes nor reads them: the arrays and what the kernel computes stay."""
+    import numba
+
+    from dlasweep._jit import prefetch
+
+    @numba.njit
+    def hinted(rows, links):
+        total = 0.0
+        for i in range(len(links)):
+            prefetch(rows, i)
+            prefetch(links, i)
+            total += rows[i, 0] * links[i]
+        return total
+
+    rows, links = np.arange(30.0).reshape(10, 3), np.arange(10, dtype=np.int32)
+    before = rows.copy(), links.copy()
+    assert hinted(rows, links) == float((rows[:, 0] * links).sum())
+    np.testing.assert_array_equal(rows, before[0])
+    np.testing.assert_array_equal(links, before[1])
+
+
 def test_diffusion_times_are_four_bytes_and_saturate():
     """A particle's diffusion time is stored in 4 bytes; a count beyond them reads as the largest, not wrapped."""
     from dlasweep.kernels.model import MOST_STEPS, STEPS_DTYPE, diffusion_time

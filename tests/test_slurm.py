@@ -53,8 +53,10 @@ INTERRUPTED = "finished tasks are kept, continue with --resume"
 # Without SLURM: options, wall time, the job script.
 
 @pytest.mark.parametrize("text, seconds", [("90", 5400), ("1:30", 90), ("02:00:00", 7200), ("1-12", 129600),
-                                           ("1-00:30", 88200), ("1-0:0:10", 86410)])
+                                           ("1-00:30", 88200), ("1-0:0:10", 86410), ("99:99:99", 362439)])
 def test_walltime_reads_slurms_formats(text, seconds):
+    """As SLURM's own ``time_str2secs`` reads them: it adds the fields up without bounding minutes or
+    seconds to 59, so that 99:99:99 is 99 hours, 99 minutes and 99 seconds."""
     assert launcher.walltime_seconds(text) == seconds
 
 

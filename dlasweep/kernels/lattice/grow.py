@@ -31,10 +31,14 @@ The walk's passes clocked by kind (processor cycles about each pass, about 30 of
 seed 1, the same clusters): in 2D a particle's walk grows from 7.2k cycles at 1e5 to 12.5k at 1e7.
 Of the 5.3k, 2.8k are Brownian jumps that follow a Brownian jump: there are more of them (3.2 to
 12.8 a particle), and each costs more (205 to 270 cycles). Another 1.9k is the square jumps' cost
-(204 to 285 cycles each, 18.7 to 19.9 a particle). Single steps stay at 1.4k. In 3D it grows from
-21.8k at 1e5 to 47.8k at 3e6. Square jumps account for 12.1k of that (260 to 490 cycles each, 43.8
-to 48.0 a particle), and Brownian jumps after Brownian jumps for 10.1k (4.0 to 21.3 a particle, 258
-to 523 cycles). A read that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140
+(204 to 285 cycles each, 18.7 to 19.9 a particle). Single steps stay at 1.4k. In 3D, with the
+field packed (the time-stamp counter about each pass, one growth alone), it grows from 10.0k
+at 1e5 to 12.2k at 1e6 and 16.7k at 1e7: Brownian jumps that begin far (released, returned or past
+a Brownian jump) take 0.5k, 1.9k and 4.3k (4.0, 14.1 and 29.6 a particle at 135 to 144 cycles each:
+their number grows), square jumps 6.2k, 6.8k and 8.6k (49.5, 51.7 and 52.1 a particle at 126, 131
+and 165 cycles each: their reads grow), single steps 2.3k to 2.5k, returns 0.8k. At 3e7 (beside
+other growths on the other core) 26.4k: 34.7 such Brownian jumps at 233 cycles, square jumps at 250,
+single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster. A read that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140
 to 180 beyond 4 to 8 MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB
 of written cache lines: the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
 23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,

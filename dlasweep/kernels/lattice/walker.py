@@ -18,7 +18,13 @@ from .words import FIELD_CAP, fine2, fine3, in_contact, mark_images, occupied, s
 FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
 """By dimension: where the centre pyramid bounds a site's distance by this much, no held coarse cell
 lies within the field's cap of the site's (a particle in one would lie within cap coarse cells less
-a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``)."""
+a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``).
+
+Measured and not kept: the field left unread, and a Brownian jump taken, wherever the pyramid's bound
+alone reaches ``CIRCLE_MIN`` (3D, seed 1, side by side, the cores swapped): 1e5 89.2 steps a particle
+against 86.3 in 1.044 and 1.097 times the time, 1e6 102.9 against 99.8 in 0.980 and 0.991; only where
+it reaches beyond the field's largest bound (21 sites), 1e5 86.8 steps in 1.023 and 1.006 times, 1e6
+100.2 in 0.999 and 1.003. The field's read is not what a far walker waits on."""
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into attach
 
 
