@@ -38,9 +38,10 @@ a Brownian jump) take 0.5k, 1.9k and 4.3k (4.0, 14.1 and 29.6 a particle at 135 
 their number grows), square jumps 6.2k, 6.8k and 8.6k (49.5, 51.7 and 52.1 a particle at 126, 131
 and 165 cycles each: their reads grow), single steps 2.3k to 2.5k, returns 0.8k. At 3e7 (beside
 other growths on the other core) 26.4k: 34.7 such Brownian jumps at 233 cycles, square jumps at 250,
-single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster. A read that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140
-to 180 beyond 4 to 8 MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB
-of written cache lines: the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
+single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster. A read
+that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140 to 180 beyond 4 to 8
+MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB of written cache lines:
+the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
 23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,
 level-1 words 6.3, field 10.5, pyramid 2.3), beyond a last-level cache of 32 MiB: on a host whose
 cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. The

@@ -229,7 +229,7 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     1e7 (the rest of a walk step: 78 ns at 1e5, 88 at 1e7); 3D, 11 a particle, 417, 603
     and 660 ns at 1e5, 1e6 and 3e6, 34% of the walk's time at each and 35% of its growth
     from 1e5 to 3e6 (the rest of a walk step: 98 ns at 1e5, 134 at 3e6). Again on the
-    time-stamp counter about each pass of the 3D walk (seed 1, before the prefetch below),
+    time-stamp counter about each pass of the 3D walk (seed 1, before the prefetch above),
     a particle's walk took 19.4k cycles at 1e5, 20.6k at 1e6 and 29.3k at 1e7: its 11.0
     gathers 601, 612 and 914 cycles each (3.5k of the 9.9k it grew), its exits from the
     pyramid's balls 11.2, 17.7 and 26.2 a particle at 209 to 270 cycles (4.8k), its jumps
