@@ -20,9 +20,9 @@ from dlasweep.kernels.lattice.exits import (
     unit_moves,
 )
 from dlasweep.kernels.walk import seed_stream
-from dlasweep.kernels.lattice.field import FIELD_PACKED, field_fill, field_lower
+from dlasweep.kernels.lattice.field import FIELD_CAP, FIELD_PACKED, field_fill, field_lower
 from dlasweep.kernels.lattice.walker import distance_bound, release
-from dlasweep.kernels.lattice.words import FIELD_CAP, fine3, rebuild, regrow
+from dlasweep.kernels.lattice.words import fine3, rebuild, regrow
 from dlasweep.kernels.model import GRID_GROWTH
 
 

@@ -298,7 +298,7 @@ def field_cell(dim, fw, ci, cj, ck):
 
 
 @inline
-def _field_tiles(dim, fw):
+def field_tiles(dim, fw):
     """Tiles a side of a field of ``fw`` cells a side."""
     return (fw + (1 << FIELD_TILE[dim]) - 1) >> FIELD_TILE[dim]
 
@@ -306,14 +306,14 @@ def _field_tiles(dim, fw):
 @jit
 def field_size(dim, fw):
     """Cells a field of ``fw`` cells a side holds, whole tiles."""
-    return (_field_tiles(dim, fw) << FIELD_TILE[dim]) ** dim
+    return (field_tiles(dim, fw) << FIELD_TILE[dim]) ** dim
 
 
 @jit
 def field_tile(dim, fw, ci, cj, ck):
     """The tile of cell (ci, cj, ck) in a field of ``fw`` cells a side (``field_fill``'s ``held``)."""
     t = FIELD_TILE[dim]
-    return tile_number(dim, _field_tiles(dim, fw), ci >> t, cj >> t, ck >> t)
+    return tile_number(dim, field_tiles(dim, fw), ci >> t, cj >> t, ck >> t)
 
 
 PYRAMID_STEP = (0, 0, 2, 1)

@@ -63,11 +63,11 @@ from ..centres import pyramid_dist
 from ..model import STEPS_DTYPE, checkpoint, grown, lockstep_flag, model_from, sticks_xo
 from ..walk import return_to_plane, return_to_sphere, seed_stream, xdir, xo
 from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
-from .field import FIELD_MASK, field_place
+from .field import FIELD_CAP, FIELD_MASK, field_place
 from .lockstep import grow_in_lockstep
 from .parents import lattice_parents
 from .walker import FAR_CLEAR, attach, near_walk, outside, release, site
-from .words import FIELD_CAP, fine2, fine3, rebuild, regrow, site_word, word_at
+from .words import fine2, fine3, rebuild, regrow, site_word, word_at
 
 JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
 CIRCLE_MIN = 16.0  # smallest Brownian jump: below it the exact square jumps do the work

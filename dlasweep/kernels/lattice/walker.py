@@ -12,8 +12,8 @@ from .. import maps
 from ..centres import pyramid_dist
 from ..model import GRID_GROWTH, diffusion_time, sticks_xo
 from ..walk import below, direction, uniform, xo
-from .field import FIELD_MASK, field_place
-from .words import FIELD_CAP, fine2, fine3, in_contact, mark_images, occupied, site_word, word_at
+from .field import FIELD_CAP, FIELD_MASK, field_place
+from .words import fine2, fine3, in_contact, mark_images, occupied, site_word, word_at
 
 FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
 """By dimension: where the centre pyramid bounds a site's distance by this much, no held coarse cell

@@ -16,12 +16,7 @@ import numpy as np
 from ..._jit import jit
 from .. import maps
 from ..centres import FCAP, level_lower, levels_from_held, pyramid_lower
-from .field import FIELD_PACKED, field_fill, field_lower, field_value
-
-FIELD_CAP = (0, 0, 16, 6)
-"""By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
-to 28 sites out take cube exits, not far jumps) did not shorten the walk: seeds 1 and 2, 92.7 and
-85.3 steps a particle at 1e5 against 86.3 and 81.0, 106.7 and 99.2 at 1e6 against 99.8 and 100.2."""
+from .field import FIELD_CAP, FIELD_PACKED, field_fill, field_lower, field_value
 
 
 @jit
