@@ -31,7 +31,7 @@ from .bench_targets import (
     target_table,
     verdict,
 )
-from .host import READS, latency_line, read_latency
+from .host import READS, RUN_SET, latency_line, read_latency, shared_cache
 from .schema import Variable
 
 MIB = "2^20 byte"
@@ -46,6 +46,10 @@ BENCH_SCHEMA = {
     # MiB, in words udunits reads
     "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
     "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
+    "host_read_before": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {RUN_SET:g} "
+                                 "MiB, just before the run kept (dlasweep.host.shared_cache)"),
+    "host_read_after": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {RUN_SET:g} "
+                                "MiB, just after the run kept"),
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
     "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
@@ -146,13 +150,13 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     # ns/step: the cost of one walk step (or exact jump), which rises as the
     # grids near the walker outgrow the processor's caches.
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
-         f"{'peak MB':>9}{'added MB':>10}")
+         f"{'peak MB':>9}{'added MB':>10}{'host ns':>10}")
     ends = {}
     runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
         again = (name, method, n) in runs
         runs.setdefault((name, method, n), []).extend(
-            probe(params, n) for _ in range(1 if quick or n >= FULL_COUNT else REPEATS))
+            _beside_the_host(params, n) for _ in range(1 if quick or n >= FULL_COUNT else REPEATS))
         r = _median_run(runs[name, method, n])
         if again:
             echo(f"{name}: {n} again after the rest, {len(runs[name, method, n])} runs from "
@@ -161,7 +165,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         echo(
             f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
             f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
-            f"{r['added_mb']:>10.0f}"
+            f"{r['added_mb']:>10.0f}{_host_cell(r):>10}"
         )
         if n == HUGE_COUNT:
             with tempfile.TemporaryDirectory() as scratch:
@@ -196,6 +200,18 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     return ds
 
 
+def _beside_the_host(params: dict, n: int) -> dict:
+    """``probe``'s figures, with the host's read time within ``host.RUN_SET`` MiB just before and after the run."""
+    before = shared_cache()
+    run = probe(params, n)
+    return {**run, "host_read_before": before, "host_read_after": shared_cache()}
+
+
+def _host_cell(run: dict) -> str:
+    """The host's read times about a run, before>after, in ns: '14>133' names a run the host's neighbours slowed."""
+    return f"{run['host_read_before']:.0f}>{run['host_read_after']:.0f}"
+
+
 def _median_run(runs) -> dict:
     """The run of median time among ``runs``, with the fastest and slowest times of them all."""
     ordered = sorted(runs, key=lambda run: run["seconds"])
@@ -220,8 +236,9 @@ def _end_to_end_line(name, n, figures) -> str:
 def _to_dataset(rows) -> xr.Dataset:
     """The measurements as a Dataset on ``run``, laid out and described by ``BENCH_SCHEMA``."""
     keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
-    # a row of one run: its time is the fastest and the slowest
-    rows = [{"seconds_low": r["seconds"], "seconds_high": r["seconds"], **r} for r in rows]
+    # a row of one run: its time is the fastest and the slowest; a row made up, not run: the host unread
+    rows = [{"seconds_low": r["seconds"], "seconds_high": r["seconds"], "host_read_before": np.nan,
+             "host_read_after": np.nan, **r} for r in rows]
     columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype))
                for name, var in BENCH_SCHEMA.items()}
     coords = ("model", "method", "n")

@@ -46,6 +46,22 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
     return latency
 
 
+RUN_SET = 16.0
+"""MiB: the working set ``dlasweep bench`` reads just before and after each run (``shared_cache``)."""
+
+
+def shared_cache(mib: float = RUN_SET, reads: int = READS // 10) -> float:
+    """Nanoseconds a read within ``mib`` MiB: whether the last-level cache is the process's, now.
+
+    A 3D grid of 1e7 spans some 46 MiB of written cache lines. On a host with
+    others on it, the last-level cache held 16 MiB at 14 ns a read at one hour
+    and 4 MiB the next (8 and 16 MiB then at 130 to 140 ns), and the same 3D
+    lattice cluster of 1e7 took 104 s against 74 in the same steps. Read beside
+    a long run, this tells a quiet machine from a shared one.
+    """
+    return read_latency((mib,), reads=reads)[float(mib)]
+
+
 def one_cycle(lines: int, rng) -> np.ndarray:
     """A chain through ``lines`` cache lines in random order: at each line's first word, the first word of
     the next line on one cycle that visits them all (``LINE // 8`` int64 words a line)."""
