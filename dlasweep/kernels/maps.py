@@ -202,7 +202,8 @@ def carry(old, old_side, new, new_side, bits, shift, dim, packed=False):
     that the two grids take little more memory than the larger one.
     """
     tiles = (old_side + (1 << bits) - 1) >> bits
-    per_tile = (1 << (dim * bits)) >> (1 if packed else 0)  # elements a tile
+    cells = 2 if packed else 1  # cells an element
+    per_tile = (1 << (dim * bits)) // cells  # elements a tile
     size = old.itemsize
     base = 0
     done = 0
@@ -213,16 +214,16 @@ def carry(old, old_side, new, new_side, bits, shift, dim, packed=False):
                     v = old[base + inner]
                     if v == 0:
                         continue
-                    if not packed:
-                        a, b, c = untiled(dim, bits, ti, tj, tk, inner)
-                        new[tiled(dim, bits, new_side, a + shift, b + shift, c + shift if dim == 3 else 0)] = v
-                        continue
-                    for half in range(2):
+                    for half in range(cells):
                         u = (np.int64(v) >> (4 * half)) & 15
-                        if u != 0:
-                            a, b, c = untiled(dim, bits, ti, tj, tk, 2 * inner + half)
-                            cell = tiled(dim, bits, new_side, a + shift, b + shift, c + shift if dim == 3 else 0)
+                        if packed and u == 0:
+                            continue
+                        a, b, c = untiled(dim, bits, ti, tj, tk, cells * inner + half)
+                        cell = tiled(dim, bits, new_side, a + shift, b + shift, c + shift if dim == 3 else 0)
+                        if packed:
                             new[cell >> 1] |= np.uint8(u << ((cell & 1) << 2))
+                        else:
+                            new[cell] = v
                 base += per_tile
             done = release(old, done, base * size)
     release(old, done, len(old) * size)
