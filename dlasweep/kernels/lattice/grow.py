@@ -38,7 +38,12 @@ a Brownian jump) take 0.5k, 1.9k and 4.3k (4.0, 14.1 and 29.6 a particle at 135 
 their number grows), square jumps 6.2k, 6.8k and 8.6k (49.5, 51.7 and 52.1 a particle at 126, 131
 and 165 cycles each: their reads grow), single steps 2.3k to 2.5k, returns 0.8k. At 3e7 (beside
 other growths on the other core) 26.4k: 34.7 such Brownian jumps at 233 cycles, square jumps at 250,
-single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster. A read
+single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster.
+Where those far jumps happen (3D, seed 1, counted by the walker's radius over r_max; every one a
+sphere bounded by the pyramid, none by the cluster's circle or a cube): 4.8 a particle at 1e5, 3.5
+of them beyond r_max and 1.3 inside; 16.3 at 1e6, 6.5 and 9.8; 32.3 at 1e7, 7.1 and 25.2, 18.0 of
+those between 0.6 and 0.9 r_max. Walkers reach deeper into the open 3D cluster as it grows: the
+growth is inside it, not walkers bouncing between the launch sphere and the outermost arms. A read
 that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140 to 180 beyond 4 to 8
 MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB of written cache lines:
 the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
