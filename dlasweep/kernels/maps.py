@@ -215,9 +215,10 @@ def carry(old, old_side, new, new_side, bits, shift, dim, packed=False):
                     if v == 0:
                         continue
                     for half in range(cells):
-                        u = (np.int64(v) >> (4 * half)) & 15
-                        if packed and u == 0:
-                            continue
+                        if packed:
+                            u = (np.int64(v) >> (4 * half)) & 15  # the half's cell
+                            if u == 0:
+                                continue
                         a, b, c = untiled(dim, bits, ti, tj, tk, cells * inner + half)
                         cell = tiled(dim, bits, new_side, a + shift, b + shift, c + shift if dim == 3 else 0)
                         if packed:
