@@ -1,7 +1,7 @@
 """Kernel benchmarks: speed, memory and cost scaling, side by side in one run.
 
 Each (model, N) runs in a fresh interpreter so that its peak memory is its
-own, ``REPEATS`` times below ``FULL_COUNT`` (the median kept); numba
+own, ``REPEATS`` times below ``HUGE_COUNT`` (the median kept); numba
 compilation is excluded by growing a small cluster first (the kernels are
 cached on disk). The naive baseline (single steps everywhere, a
 kill circle at twice the launch radius) runs at small N beside the exact
@@ -70,9 +70,12 @@ FULL_COUNT = 10_000_000
 HUGE_COUNT = 100_000_000
 """``--huge`` adds this N for the 2D models (tens of minutes each)."""
 REPEATS = 3
-"""Fresh runs of each N below ``FULL_COUNT``, of which the bench keeps the median time: one
+"""Fresh runs of each N below ``HUGE_COUNT``, of which the bench keeps the median time: one
 2D off-lattice cluster of 1e5 took 0.543, 0.434 and 0.460 s in three runs on one machine,
-enough to move a cost exponent from 1e5 to 1e7 by 0.03. With ``FULL_COUNT``, the first N of
+enough to move a cost exponent from 1e5 to 1e7 by 0.03; the same 3D lattice cluster of 1e7
+(seed 1, 116.1 steps a particle each time) took 73.8, 77.7 and 86.3 s in three benches on one
+host, a cost exponent of 1.09 to 1.125, as other tenants held more of the host's last-level
+cache (``host.shared_cache``). With ``FULL_COUNT``, the first N of
 ``SCALING`` runs as often again after it, so that its runs bracket the long one: a 2D lattice
 cluster of 1e5 took 0.38 to 0.55 s in six runs within a minute on one machine, and the host's
 speed drifts over the minutes between a model's first runs and its last. The cost exponent is
@@ -156,7 +159,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     for name, method, params, n in plan:
         again = (name, method, n) in runs
         runs.setdefault((name, method, n), []).extend(
-            _beside_the_host(params, n) for _ in range(1 if quick or n >= FULL_COUNT else REPEATS))
+            _beside_the_host(params, n) for _ in range(1 if quick or n >= HUGE_COUNT else REPEATS))
         r = _median_run(runs[name, method, n])
         if again:
             echo(f"{name}: {n} again after the rest, {len(runs[name, method, n])} runs from "

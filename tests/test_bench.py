@@ -160,8 +160,32 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
         assert float(row.seconds_low[0]) == times[0] and float(row.seconds_high[0]) == times[-1]
         assert float(row.seconds[0]) == times[len(times) // 2]
         assert any(line.startswith(f"{name}: {lo} again after the rest, 6 runs") for line in lines), name
+        longs = [i for i in mine if calls[i][2] == hi]  # the long runs too: one would be the host's chance
+        assert len(longs) == bench.REPEATS, name
+        row = ds.where((ds.model == name) & (ds.method == "exact") & (ds.n == hi), drop=True)
+        times = sorted(1e-6 * hi * (1 + 0.01 * (i + 1)) for i in longs)
+        assert [float(row[v][0]) for v in ("seconds_low", "seconds", "seconds_high")] == times, name
         low, high = (bench_targets.exponent_attribute(name, end) for end in ("low", "high"))
         assert ds.attrs[low] < ds.attrs[high]
+
+
+def test_a_huge_bench_grows_1e8_once(monkeypatch):
+    from dlasweep import bench
+
+    calls = []
+
+    def fake_probe(params, n, seed=1):
+        calls.append(n)
+        return {"seconds": 1e-6 * n, "n_grown": n, "steps": 10 * n, "status": "ok", "peak_mb": 200.0,
+                "added_mb": 1.0}
+
+    monkeypatch.setattr(bench, "probe", fake_probe)
+    monkeypatch.setattr(bench, "read_latency", lambda reads: {1.0: 10.0})
+    monkeypatch.setattr(bench, "end_to_end", lambda params, n, peak, folder: {"sweep_peak_mb": peak})
+    monkeypatch.setattr(bench, "_end_to_end_line", lambda name, n, figures: f"{name} end to end")
+    monkeypatch.setattr(bench, "target_table", lambda ds: [])
+    bench.run_bench(huge=True, models=["lattice-2d"], echo=lambda line: None)
+    assert calls.count(bench.HUGE_COUNT) == 1 and calls.count(bench.FULL_COUNT) == bench.REPEATS
 
 
 def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
