@@ -74,8 +74,9 @@ REPEATS = 3
 2D off-lattice cluster of 1e5 took 0.543, 0.434 and 0.460 s in three runs on one machine,
 enough to move a cost exponent from 1e5 to 1e7 by 0.03; the same 3D lattice cluster of 1e7
 (seed 1, 116.1 steps a particle each time) took 73.8, 77.7 and 86.3 s in three benches on one
-host, a cost exponent of 1.09 to 1.125, as other tenants held more of the host's last-level
-cache (``host.shared_cache``). With ``FULL_COUNT``, the first N of
+host, a cost exponent of 1.09 to 1.125, and 81.9 to 89.4 s in five runs within 70 minutes, as the
+host's other tenants took more of its last-level cache and memory (reads of 64 MiB waiting on the
+last from 105 to 154 ns; ``host.read_latency``). With ``FULL_COUNT``, the first N of
 ``SCALING`` runs as often again after it, so that its runs bracket the long one: a 2D lattice
 cluster of 1e5 took 0.38 to 0.55 s in six runs within a minute on one machine, and the host's
 speed drifts over the minutes between a model's first runs and its last. The cost exponent is
