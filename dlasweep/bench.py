@@ -31,12 +31,15 @@ from .bench_targets import (
     target_table,
     verdict,
 )
-from .host import READS, RUN_SET, latency_line, read_latency, shared_cache
+from .host import MEMORY_SET, READS, RUN_SET, latency_line, read_latency, shared_cache
 from .schema import Variable
 
 MIB = "2^20 byte"
 """The units of memory sizes (MiB, which udunits does not know)."""
 
+BESIDE_A_RUN = {"host_read": RUN_SET, "memory_read": MEMORY_SET}
+"""The host's reads just before and after each run (``_beside_the_host``): the MiB each reads, by the
+name of its variables (``host_read_before``, ``host_read_after``, ...) and of its column."""
 BENCH_SCHEMA = {
     "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
     "seconds_low": Variable(("run",), np.float64, "s", "fastest of the repeated runs of this model, method and N"),
@@ -46,10 +49,9 @@ BENCH_SCHEMA = {
     # MiB, in words udunits reads
     "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
     "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
-    "host_read_before": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {RUN_SET:g} "
-                                 "MiB, just before the run kept (dlasweep.host.shared_cache)"),
-    "host_read_after": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {RUN_SET:g} "
-                                "MiB, just after the run kept"),
+    **{f"{reads}_{when}": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {mib:g} "
+                                   f"MiB, just {when} the run kept (dlasweep.host.shared_cache)")
+       for reads, mib in BESIDE_A_RUN.items() for when in ("before", "after")},
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
     "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
@@ -154,7 +156,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     # ns/step: the cost of one walk step (or exact jump), which rises as the
     # grids near the walker outgrow the processor's caches.
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
-         f"{'peak MB':>9}{'added MB':>10}{'host ns':>10}")
+         f"{'peak MB':>9}{'added MB':>10}{'host ns':>10}{'memory ns':>11}")
     ends = {}
     runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
@@ -169,7 +171,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         echo(
             f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
             f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
-            f"{r['added_mb']:>10.0f}{_host_cell(r):>10}"
+            f"{r['added_mb']:>10.0f}{_host_cell(r, 'host_read'):>10}{_host_cell(r, 'memory_read'):>11}"
         )
         if n == HUGE_COUNT:
             with tempfile.TemporaryDirectory() as scratch:
@@ -205,15 +207,16 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
 
 
 def _beside_the_host(params: dict, n: int) -> dict:
-    """``probe``'s figures, with the host's read time within ``host.RUN_SET`` MiB just before and after the run."""
-    before = shared_cache()
+    """``probe``'s figures, with the host's read times (``BESIDE_A_RUN``) just before and after the run."""
+    before = {f"{reads}_before": shared_cache(mib) for reads, mib in BESIDE_A_RUN.items()}
     run = probe(params, n)
-    return {**run, "host_read_before": before, "host_read_after": shared_cache()}
+    return {**run, **before, **{f"{reads}_after": shared_cache(mib) for reads, mib in BESIDE_A_RUN.items()}}
 
 
-def _host_cell(run: dict) -> str:
-    """The host's read times about a run, before>after, in ns: '14>133' names a run the host's neighbours slowed."""
-    return f"{run['host_read_before']:.0f}>{run['host_read_after']:.0f}"
+def _host_cell(run: dict, reads: str) -> str:
+    """One of the host's read times about a run (``BESIDE_A_RUN``), before>after, in ns: '14>133' within
+    16 MiB names a run the host's neighbours slowed."""
+    return f"{run[reads + '_before']:.0f}>{run[reads + '_after']:.0f}"
 
 
 def _median_run(runs) -> dict:
@@ -241,8 +244,8 @@ def _to_dataset(rows) -> xr.Dataset:
     """The measurements as a Dataset on ``run``, laid out and described by ``BENCH_SCHEMA``."""
     keys = {"walk_steps": "steps", "peak_memory": "peak_mb", "added_memory": "added_mb"}
     # a row of one run: its time is the fastest and the slowest; a row made up, not run: the host unread
-    rows = [{"seconds_low": r["seconds"], "seconds_high": r["seconds"], "host_read_before": np.nan,
-             "host_read_after": np.nan, **r} for r in rows]
+    unread = {f"{reads}_{when}": np.nan for reads in BESIDE_A_RUN for when in ("before", "after")}
+    rows = [{"seconds_low": r["seconds"], "seconds_high": r["seconds"], **unread, **r} for r in rows]
     columns = {name: (var.dims, np.array([r[keys.get(name, name)] for r in rows], dtype=var.dtype))
                for name, var in BENCH_SCHEMA.items()}
     coords = ("model", "method", "n")

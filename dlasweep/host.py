@@ -48,6 +48,11 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
 
 RUN_SET = 16.0
 """MiB: the working set ``dlasweep bench`` reads just before and after each run (``shared_cache``)."""
+MEMORY_SET = 64.0
+"""MiB: the working set past any last-level cache that ``dlasweep bench`` also reads beside each run:
+the memory a grid that outgrew the cache waits on. A 16 MiB read at 14 to 20 ns about a 3D lattice
+cluster of 1e7 told nothing of its time (80.2 to 83.0 s, against 73.8 in the same steps hours
+before), while 64 MiB reads moved between 101 and 156 ns over the same afternoon."""
 
 
 def shared_cache(mib: float = RUN_SET, reads: int = READS // 10) -> float:

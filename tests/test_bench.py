@@ -26,16 +26,19 @@ def test_bench_quick_writes_its_outputs(tmp_path):
         runs = ds.sizes["run"]
         assert list(ds.attrs["host_read_mib"]) == list(WORKING_SETS) and (ds.attrs["host_read_ns"] > 0).all()
         # each run beside the host's read time just before and after it, as its line prints them
-        before, after = ds.host_read_before.values, ds.host_read_after.values
-        assert ((before > 0) & (before < 1e4) & (after > 0) & (after < 1e4)).all()
-        printed = [f"{b:.0f}>{a:.0f}" for b, a in zip(before, after)]
+        printed = []
+        for reads in ("host_read", "memory_read"):
+            before, after = ds[reads + "_before"].values, ds[reads + "_after"].values
+            assert ((before > 0) & (before < 1e4) & (after > 0) & (after < 1e4)).all()
+            printed.append([f"{b:.0f}>{a:.0f}" for b, a in zip(before, after)])
     # The log: the command, a header, then one line per run: model, method, N.
     lines = (out / "bench.txt").read_text().splitlines()
     assert lines[0].startswith("$ dlasweep bench")
     assert lines[1].split()[:3] == ["model", "method", "N"]
     rows = [line for line in lines[2:] if line.split()[1:2] in (["exact"], ["naive"])]
     assert len(rows) == runs
-    assert lines[1].split()[-2:] == ["host", "ns"] and [row.split()[-1] for row in rows] == printed
+    assert lines[1].split()[-4:] == ["host", "ns", "memory", "ns"]
+    assert [row.split()[-2:] for row in rows] == [list(pair) for pair in zip(*printed)]
     picture = imread(out / "bench.png")
     assert picture.shape[0] > 300 and picture.shape[1] > 500 and picture[..., :3].std() > 0  # drawn, not blank
 
