@@ -39,7 +39,7 @@ MIB = "2^20 byte"
 
 BESIDE_A_RUN = {"host_read": RUN_SET, "memory_read": MEMORY_SET}
 """The host's reads just before and after each run (``_beside_the_host``): the MiB each reads, by the
-name of its variables (``host_read_before``, ``host_read_after``, ...) and of its column."""
+name of its variables (``host_read_before``, ``host_read_after``, ...) and of its column (``host ns``)."""
 BENCH_SCHEMA = {
     "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
     "seconds_low": Variable(("run",), np.float64, "s", "fastest of the repeated runs of this model, method and N"),
@@ -156,7 +156,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     # ns/step: the cost of one walk step (or exact jump), which rises as the
     # grids near the walker outgrow the processor's caches.
     echo(f"{'model':<15}{'method':<7}{'N':>10}{'seconds':>10}{'particles/s':>13}{'steps/particle':>16}{'ns/step':>9}"
-         f"{'peak MB':>9}{'added MB':>10}{'host ns':>10}{'memory ns':>11}")
+         f"{'peak MB':>9}{'added MB':>10}" + "".join(f"{reads.replace('_read', ' ns'):>11}" for reads in BESIDE_A_RUN))
     ends = {}
     runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
@@ -171,7 +171,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         echo(
             f"{name:<15}{method:<7}{n:>10}{r['seconds']:>10.3f}{r['n_grown'] / r['seconds']:>13.0f}"
             f"{r['steps'] / r['n_grown']:>16.1f}{r['seconds'] / r['steps'] * 1e9:>9.1f}{r['peak_mb']:>9.0f}"
-            f"{r['added_mb']:>10.0f}{_host_cell(r, 'host_read'):>10}{_host_cell(r, 'memory_read'):>11}"
+            f"{r['added_mb']:>10.0f}" + "".join(f"{_host_cell(r, reads):>11}" for reads in BESIDE_A_RUN)
         )
         if n == HUGE_COUNT:
             with tempfile.TemporaryDirectory() as scratch:
@@ -208,9 +208,14 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
 
 def _beside_the_host(params: dict, n: int) -> dict:
     """``probe``'s figures, with the host's read times (``BESIDE_A_RUN``) just before and after the run."""
-    before = {f"{reads}_before": shared_cache(mib) for reads, mib in BESIDE_A_RUN.items()}
+    before = _host_reads("before")
     run = probe(params, n)
-    return {**run, **before, **{f"{reads}_after": shared_cache(mib) for reads, mib in BESIDE_A_RUN.items()}}
+    return {**run, **before, **_host_reads("after")}
+
+
+def _host_reads(when: str) -> dict:
+    """The host's reads (``BESIDE_A_RUN``) now, by their variables' names ending in ``when``."""
+    return {f"{reads}_{when}": shared_cache(mib) for reads, mib in BESIDE_A_RUN.items()}
 
 
 def _host_cell(run: dict, reads: str) -> str:
