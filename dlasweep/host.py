@@ -50,13 +50,17 @@ RUN_SET = 16.0
 """MiB: the working set ``dlasweep bench`` reads just before and after each run (``shared_cache``)."""
 MEMORY_SET = 64.0
 """MiB: the working set past any last-level cache that ``dlasweep bench`` also reads beside each run:
-the memory a grid that outgrew the cache waits on. A 16 MiB read at 14 to 20 ns about a 3D lattice
-cluster of 1e7 told nothing of its time (80.2 to 83.0 s, against 73.8 in the same steps hours
-before), while 64 MiB reads moved between 101 and 156 ns over the same afternoon."""
+the memory a grid that outgrew the cache waits on. Neither read orders the 3D lattice cluster of 1e7
+(116.1 steps a particle each time) on a shared host: in three ``bench --huge`` runs of one afternoon
+its median run took 86.5, 85.4 and 78.0 s beside 16 MiB reads of 14>33, 24>31 and 104>20 ns
+(before>after) and 64 MiB reads of 103>117, 107>102 and 145>70; 16 MiB reads of 14 to 20 ns came
+beside 80.2 to 83.0 s, against 73.8 in the same steps hours before. They tell which runs shared
+their host, not by how much."""
 
 
 def shared_cache(mib: float = RUN_SET, reads: int = READS // 10) -> float:
-    """Nanoseconds a read within ``mib`` MiB: whether the last-level cache is the process's, now.
+    """Nanoseconds a read within ``mib`` MiB: whether the last-level cache is the process's, now (past
+    it, ``MEMORY_SET``: what a read from memory costs, now).
 
     A 3D grid of 1e7 spans some 46 MiB of written cache lines. On a host with
     others on it, the last-level cache held 16 MiB at 14 ns a read at one hour
