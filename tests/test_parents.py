@@ -133,3 +133,13 @@ def test_lattice_parents_on_a_known_path():
     np.testing.assert_array_equal(lattice_parents(line, moves, 0, 3), [-1, 0, 1])
     hashed = np.array(list(itertools.product(range(-40, 40), range(-40, 40))), np.int32)
     assert (lattice_parents(hashed, moves, 1, 0)[1:] >= 0).all()  # a full block: every site found
+
+
+@pytest.mark.parametrize("name", ["lattice-2d", "lattice-3d"])
+def test_lattice_parents_across_the_directory(name):
+    """Clusters that span several of the directory's squares (cubes) of tiles on every axis (2D 256
+    sites, 3D 32), which the last pass reads in their order: the naive rule still holds."""
+    c = dla.grow(20_000, seed=3, **CASES[name])
+    span = np.ptp(c.points, axis=0)
+    assert (span > 2 * (256 if c.params["dim"] == 2 else 32)).all()
+    _lattice_rule(name, c)
