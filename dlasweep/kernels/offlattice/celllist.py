@@ -95,7 +95,14 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
 @borrow
 def _move_rows(pts, order, nxt, first, count, dim):
     """Move the rows first..count-1 of ``pts`` and ``order`` to the rows ``nxt`` names, in
-    place, cycle by cycle (``nxt`` of each then names its own row)."""
+    place, cycle by cycle (``nxt`` of each then names its own row).
+
+    Each swap waits on the read before it. Measured and not kept: the rows written past
+    ``count`` first (the rows there are free until the cluster is half grown), each to its
+    place, and copied back, so that no read waits on another: on a random permutation of 3e6
+    rows 0.036 s against 0.411, but 3D growths took the same time (3e6 39.0 and 39.0 s against
+    38.8 and 39.0; 1e7 162.7 and 163.8 against 163.3 and 162.4; seed 1, side by side, the cores
+    swapped, the same clusters): a sort's rows move a short way, most of them sorted already."""
     for i in range(first, count):
         while nxt[i] != i:
             j = nxt[i]
