@@ -158,7 +158,6 @@ def lattice_parents(points, moves, nseed, period):
         _site(points, i, dim, period, q)
         _, k = _slot(q[0], q[1], q[2], dim, lo, side)
         index[offsets[parents[i]] + _below(words[parents[i]], k)] = i
-    mask = (1 << shift) - 1
     for c in range(len(used)):
         if used[c] == 0:
             continue
@@ -173,9 +172,8 @@ def lattice_parents(points, moves, nseed, period):
                 k = _ones((rest & (~rest + np.uint64(1))) - np.uint64(1))  # the lowest set bit's place
                 rest &= rest - np.uint64(1)
                 i = index[at]
-                q0 = lo[0] + (t0 << shift) + (k & mask)
-                q1 = lo[1] + (t1 << shift) + ((k >> shift) & mask)
-                q2 = lo[2] + (t2 << shift) + (k >> (2 * shift)) if dim == 3 else 0
+                r0, r1, r2 = untiled(dim, shift, t0, t1, t2, k)  # the site, from the box's lowest
+                q0, q1, q2 = lo[0] + r0, lo[1] + r1, lo[2] + r2
                 parents[i] = -1 if i < nseed or (period > 0 and (q2 if dim == 3 else q1) == 0) else \
                     _earliest_neighbour(i, q0, q1, q2, moves, dim, period, lo, side, directory, words, offsets, index)
     return parents

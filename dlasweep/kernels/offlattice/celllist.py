@@ -101,7 +101,7 @@ def _move_rows(pts, order, nxt, first, count, dim):
     ``count`` first (the rows there are free until the cluster is half grown), each to its
     place, and copied back, so that no read waits on another: on a random permutation of 3e6
     rows 0.036 s against 0.411, but 3D growths took the same time (3e6 39.0 and 39.0 s against
-    38.8 and 39.0; 1e7 162.7 and 163.8 against 163.3 and 162.4; seed 1, side by side, the cores
+    38.8 and 38.8; 1e7 162.7 and 163.8 against 163.3 and 162.4; seed 1, side by side, the cores
     swapped, the same clusters): a sort's rows move a short way, most of them sorted already."""
     for i in range(first, count):
         while nxt[i] != i:
