@@ -77,6 +77,10 @@ def cached(kernel, first, *more) -> bool:
 # The growth kernels take a batch's generators as a Python list: numba's
 # typed list took 14 us a generator to build, more than the call it saves.
 warnings.filterwarnings("ignore", message="(?s).*reflected list", category=NumbaPendingDeprecationWarning)
+# ``maps.zeroed`` maps its largest arrays in object mode (``maps._unreserved``), a call that holds the
+# GIL once a regrid: numba warns of it at every load of each kernel that calls it.
+warnings.filterwarnings("ignore", message="(?s).*Code running in object mode won't allow parallel",
+                        category=numba.NumbaWarning)
 
 _clock_gettime = numba.types.ExternalFunction("clock_gettime", numba.int32(numba.int32, numba.types.voidptr))
 """The C library's, linked by name (a ctypes pointer would keep numba from caching its callers)."""

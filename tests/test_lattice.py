@@ -1,5 +1,6 @@
 """The lattice kernel's exact machinery: square/cube exit laws and their alias tables."""
 
+import os
 import sys
 
 import naive
@@ -20,7 +21,7 @@ from dlasweep.kernels.lattice.exits import (
     unit_moves,
 )
 from dlasweep.kernels.walk import seed_stream
-from dlasweep.kernels.lattice.field import FIELD_CAP, FIELD_PACKED, field_fill, field_lower
+from dlasweep.kernels.lattice.field import FIELD_CAP, FIELD_PACKED, field_fill, field_lower, field_value
 from dlasweep.kernels.lattice.walker import distance_bound, release
 from dlasweep.kernels.lattice.words import fine3, rebuild, regrow
 from dlasweep.kernels.model import GRID_GROWTH
@@ -221,6 +222,42 @@ def test_zeroed_takes_memory_only_where_written():
     written = _resident_mb() - before
     assert read < 8
     assert 12 < written < 24
+
+
+@pytest.mark.skipif(not maps.UNRESERVED, reason="Linux's MAP_NORESERVE")
+def test_zeroed_beyond_the_machines_memory():
+    """Twice the machine's memory zeroed (numba's own allocator refuses it): zeros, written where
+    asked, and only the pages written take memory."""
+    memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    before = _resident_mb()
+    a = maps.zeroed(2 * memory // 8, np.uint64)
+    stride = len(a) // 1000
+    a[::stride] = 3
+    assert (a[::stride] == 3).all() and not a[1::stride].any() and not a[-1]
+    assert _resident_mb() - before < 64
+
+
+@pytest.mark.skipif(not maps.UNRESERVED, reason="Linux's MAP_NORESERVE")
+def test_a_3d_lattice_grid_past_the_machines_memory_holds_its_particles():
+    """The grid of a 3D lattice cluster whose farthest site lies 2040 sites out (side 8192: 72 GiB of
+    occupancy words, a cluster of some 1.5e8) is built, in little memory, and holds its particles
+    and the field's distances about them."""
+    width = 8192
+    off = width // 2
+    pts = np.array([[0, 0, 0], [2000, -1500, 3], [-2040, 7, 2039]], np.int32)
+    before = _resident_mb()
+    words, start, blocks, cells, field = rebuild(pts, len(pts), 3, width, off, 0)
+    assert start[-1] * 8 > 64 << 30
+    assert _resident_mb() - before < 256
+    fw = width >> maps.FIELD_SHIFT
+    for p in pts:
+        i, j, k = (int(x) + off for x in p)
+        assert maps.test(words, 3, start, blocks, 0, i, j, k)
+        assert not maps.test(words, 3, start, blocks, 0, i + 1, j, k)
+        c = [x >> maps.FIELD_SHIFT for x in (i, j, k)]
+        for step, distance in ((0, 0), (2, 2), (FIELD_CAP[3] + 1, FIELD_CAP[3])):
+            cell = maps.field_cell(3, fw, c[0] + step, c[1], c[2])
+            assert FIELD_CAP[3] - field_value(field, 3, cell) == distance
 
 
 def _level_distances(pts, dim, width, shift, cap):

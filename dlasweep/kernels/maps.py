@@ -18,10 +18,11 @@ a bound from a small array (beside periodic sides the off-lattice walk
 searches the maps instead).
 """
 
+import mmap
 import sys
 
 import numpy as np
-from numba import types
+from numba import objmode, types
 
 from .._jit import borrow, inline, jit
 
@@ -101,6 +102,28 @@ swapped (the same clusters), 1e6 1.082 and 1.007 times the time, 1e7 1.033
 and 1.047."""
 
 
+UNRESERVED = sys.platform.startswith("linux")
+"""Whether ``zeroed`` may take large arrays from ``_unreserved`` (Linux's ``MAP_NORESERVE``)."""
+RESERVE_MIN = 1 << 28
+"""Bytes from which ``zeroed`` maps its array with ``_unreserved`` (256 MiB: a 3D lattice grid of side
+2048, a cluster of some 1e7; never a small cluster's, which a sweep grows by the thousand)."""
+_MAP_NORESERVE = 0x4000  # Linux's flag; Python's mmap module does not name it
+
+
+def _unreserved(nbytes):
+    """``nbytes`` zero bytes, a private anonymous mapping that Linux does not count against the memory it
+    may promise (``MAP_NORESERVE``): only the pages written take memory.
+
+    A grid spans the cluster's bounding cube, and a plain allocation of it is refused once it exceeds the
+    machine's memory, though its written pages are a small part: a 3D lattice grid of side 8192 (a cluster
+    whose farthest site lies 2044 sites out, some 1.5e8 particles) holds 72 GiB of words, refused on
+    this 24 GiB machine (``MemoryError`` from numba's allocator). Called from the kernels in object mode;
+    the array keeps the mapping, unmapped when numba drops its last reference.
+    """
+    return np.frombuffer(mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS | _MAP_NORESERVE),
+                         np.uint8)
+
+
 @jit
 def zeroed(n, dtype):
     """``np.zeros(n, dtype)`` whose pages take memory only once written.
@@ -117,7 +140,15 @@ def zeroed(n, dtype):
     lattice 1e7 (seed 1, the cores swapped) 1.062 and 1.037 times, the peak 869
     MB against 452. Small pages also map every unwritten page to one zero page,
     so the walk's reads of empty space stay in the caches.
+
+    From ``RESERVE_MIN`` bytes on Linux the array is a mapping the OS does not
+    reserve memory for (``_unreserved``), already zero.
     """
+    nbytes = n * np.empty(0, dtype).itemsize
+    if UNRESERVED and nbytes >= RESERVE_MIN:
+        with objmode(b="uint8[::1]"):
+            b = _unreserved(nbytes)
+        return b.view(dtype)
     a = np.empty(n, dtype)
     lo, hi = _release_pages(np.uintp(a.ctypes.data), np.uintp(a.nbytes))
     if hi > lo:
