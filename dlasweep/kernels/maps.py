@@ -105,8 +105,9 @@ and 1.047."""
 UNRESERVED = sys.platform.startswith("linux")
 """Whether ``zeroed`` may take large arrays from ``_unreserved`` (Linux's ``MAP_NORESERVE``)."""
 RESERVE_MIN = 1 << 28
-"""Bytes from which ``zeroed`` maps its array with ``_unreserved`` (256 MiB: a 3D lattice grid of side
-2048, a cluster of some 1e7; never a small cluster's, which a sweep grows by the thousand)."""
+"""Bytes from which ``zeroed`` maps its array with ``_unreserved`` (256 MiB: the 1.1 GiB of words of a 3D
+lattice grid of side 2048, which a cluster needs from some 4e6 particles on, are; a small cluster's grids,
+which a sweep builds by the thousand, are not)."""
 _MAP_NORESERVE = 0x4000  # Linux's flag; Python's mmap module does not name it
 
 
