@@ -388,5 +388,10 @@ def pyramid_allocate(dim, width, cap, most=64):
 
     Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
     starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
+
+    Measured and not kept: this array alone in transparent huge pages (``madvise`` after
+    ``zeroed``; the words in small pages), so that the walk's reads of the field and the pyramid
+    miss no TLB entry: 3D lattice 1e7 (seed 1, side by side, the cores swapped, the same clusters)
+    1.007 and 1.017 times the time, with 64 MB more in huge pages; 3e6 1.044 and 0.959.
     """
     return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)

@@ -22,7 +22,11 @@ exactly (Poisson kernel) instead of wandering off.
 Where a large cluster's time goes (seed 1, clocks about the parts of ``_grow``, the 2D and 3D
 growths side by side), 1e5 to 1e7: a walk step 65.0 to 83.3 ns in 2D and 91.4 to 143.2 in 3D; a
 particle's attachment 0.57 to 0.74 us (3D 1.30 to 1.61), its share of grid rebuilds 0.26 to 0.38
-us (3D 0.47 to 0.48; before ``words.regrow`` carried the grid over). The steps a particle add
+us (3D 0.47 to 0.48; before ``words.regrow`` carried the grid over). In 3D alone on a later host
+(seed 1, the other core idle, clocks about ``attach`` and the rebuilds only) at 1e5, 1e6 and 1e7:
+the attachment 0.86, 0.92 and 1.17 us a particle, the rebuilds 0.32, 0.13 and 0.06 us, the walk 5.89,
+6.84 and 10.26 us, 68.3, 68.6 and 88.4 ns a step: a step's cost holds to 1e6 and is 1.29 times as
+large at 1e7, the steps 1.35 times as many. The steps a particle add
 Brownian jumps alone: 3.7 to 13.7 in 2D (single steps 7.0 and 7.0, square jumps 21.2 and 21.9),
 4.8, 16.3 and 32.3 in 3D at 1e5, 1e6 and 1e7 (single steps 25.8, 25.8, 25.8; square jumps 49.5,
 51.7, 52.1): a walker crosses more of the open 3D cluster before it sticks.

@@ -24,7 +24,14 @@ Measured and not kept: the field left unread, and a Brownian jump taken, whereve
 alone reaches ``CIRCLE_MIN`` (3D, seed 1, side by side, the cores swapped): 1e5 89.2 steps a particle
 against 86.3 in 1.044 and 1.097 times the time, 1e6 102.9 against 99.8 in 0.980 and 0.991; only where
 it reaches beyond the field's largest bound (21 sites), 1e5 86.8 steps in 1.023 and 1.006 times, 1e6
-100.2 in 0.999 and 1.003. The field's read is not what a far walker waits on."""
+100.2 in 0.999 and 1.003. Again at 1e7, the field unread wherever the pyramid's bound gives a jump
+beyond the largest cube the field allows (22.9 sites: its largest bound, 21, less one, plus the
+rounding and ``JUMP_MARGIN``), the pyramid's bound kept as a Chebyshev one there (3D lattice, seed
+1, side by side, the cores swapped; other clusters): 1.019 and 0.997 times the time, 116.5 steps a
+particle against 116.1; with a threshold of 23 sites and the field's largest bound in its place,
+0.978 and 0.974 times, 115.3 steps; at 1e5, seeds 1 to 8, 86.0 steps a particle on average against
+84.0, 5.55 s in all against 5.65. Within the spread that other clusters alone bring. The field's
+read is not what a far walker waits on."""
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into attach
 
 
