@@ -252,8 +252,8 @@ def test_zeroed_beyond_the_machines_memory():
 @pytest.mark.skipif(not UNRESERVED_HERE, reason="Linux's MAP_NORESERVE, not counted unless overcommit is strict")
 def test_a_3d_lattice_grid_past_the_machines_memory_holds_its_particles():
     """The grid of a 3D lattice cluster whose farthest site lies 2040 sites out (side 8192: 72 GiB of
-    occupancy words, a cluster of some 1.5e8) is built, in little memory, and holds its particles
-    and the field's distances about them."""
+    occupancy words: the 3D lattice cluster of 1e8, seed 1, from 9.5e7 particles on) is built, in
+    little memory, and holds its particles and the field's distances about them."""
     width = 8192
     off = width // 2
     pts = np.array([[0, 0, 0], [2000, -1500, 3], [-2040, 7, 2039]], np.int32)

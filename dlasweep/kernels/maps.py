@@ -117,10 +117,11 @@ def _unreserved(nbytes):
 
     A grid spans the cluster's bounding cube, and a plain allocation of it is refused once it exceeds the
     machine's memory, though its written pages are a small part: a 3D lattice grid of side 8192 (a cluster
-    whose farthest site lies 2044 sites out, some 1.5e8 particles) holds 72 GiB of words, refused on
-    this 24 GiB machine (``MemoryError`` from numba's allocator). Where overcommit is strict
-    (``vm.overcommit_memory`` 2) Linux counts such a mapping all the same. Called from the kernels in object mode;
-    the array keeps the mapping, unmapped when numba drops its last reference.
+    whose farthest site lies 2044 sites out: the 3D lattice cluster of 1e8, seed 1, from 9.5e7 particles
+    on) holds 72 GiB of words, refused on this 24 GiB machine (``MemoryError`` from numba's allocator).
+    Where overcommit is strict (``vm.overcommit_memory`` 2) Linux counts such a mapping all the same.
+    Called from the kernels in object mode; the array keeps the mapping, unmapped when numba drops its
+    last reference.
     """
     return np.frombuffer(mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS | _MAP_NORESERVE),
                          np.uint8)
