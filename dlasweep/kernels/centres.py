@@ -231,7 +231,7 @@ def pyramid_lower(field, dim, W, i, j, k, levels):
     level below (``_level_rows``), up to the first level whose cell held one
     already. Returns that level, -1 when none did.
 
-    Its cost does not grow with the cluster (3D lattice, seed 1, clocks about it and about
+    Its cost grows little with the cluster (3D lattice, seed 1, clocks about it and about
     the field's lowering in a timing copy): 0.148 newly held coarse cells a particle at 1e5,
     1e6 and 3e6; this recording 0.27, 0.31 and 0.32 us a particle, the field's lowering
     0.28, 0.28 and 0.29, the whole attachment (clocks included) 0.99, 1.06 and 1.10."""
