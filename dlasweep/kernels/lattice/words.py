@@ -265,8 +265,8 @@ def fine3(words, nb, i, j, k):
     the walker's are clear, then 5: the 6.3 MiB of level-1 words about a cluster of 1e7 for the
     27.3 of occupancy; a timing copy of the walk, seed 1): 3D 1e5 100.2 steps a particle against
     86.3, in 1.37 times the time. Nor that level-1 test asked first, this pass only where it fails
-    (the same clusters: 5 is this function's cap): of the 15.6 calls a particle at 3D 1e5 and 1e6
-    (3.7, 5.1 and 6.8 of them giving 3, 4 and 5; seed 1) it answers 4.6, and 3D 3e6 took 0.978
+    (the same clusters: 5 is this function's cap): of the 15.5 and 15.6 calls a particle at 3D 1e5
+    and 1e6 (3.7, 5.1 and 6.7 to 6.8 of them giving 3, 4 and 5; seed 1) it answers 4.6, and 3D 3e6 took 0.978
     and 1.037 times the time (side by side, the cores swapped).
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
