@@ -36,13 +36,28 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
     can neither overlap them nor guess the next: a walker's own reads of a grid
     it has outgrown. The arrays come from numpy, which asks Linux for huge
     pages where it may.
+
+    A whole lap of the cycle comes first, and each walk goes on where the last
+    ended, so that every timed read is of the line the chain read longest ago:
+    the set read is the whole set even where ``reads`` is fewer than its lines.
+    Before, every walk began at the chain's start, and one of fewer reads than
+    lines read only its first ``reads`` lines again: ``shared_cache``'s reads
+    (``READS // 10``) of 16 MiB read 6.1 MiB, those of 64 MiB 6.1 MiB strewn
+    over 64 (bench.nc's ``host_read_*`` and ``memory_read_*`` before this
+    change; its closing ``host_read_ns`` did read each set). On one host at one
+    moment: 16 MiB in 42.1 to 46.5 ns a read that way, 140.7 a whole lap; 4,
+    6 and 8 MiB 34.4, 34.7 and 37.3; 12 MiB 120.4.
     """
     rng = np.random.default_rng(seed)
     latency = {}
     for mib in working_sets:
         chain = one_cycle(max(int(mib * 2**20) // LINE, 2), rng)
-        _walk(chain, 0, reads)
-        latency[float(mib)] = float(np.median([_timed_walk(chain, reads) for _ in range(rounds)])) / reads
+        at = _walk(chain, 0, max(reads, len(chain) // (LINE // 8)))
+        walks = []
+        for _ in range(rounds):
+            ns, at = _timed_walk(chain, at, reads)
+            walks.append(ns)
+        latency[float(mib)] = float(np.median(walks)) / reads
     return latency
 
 
@@ -53,7 +68,8 @@ MEMORY_SET = 64.0
 the memory a grid that outgrew the cache waits on. Neither read orders the 3D lattice cluster of 1e7
 (116.1 steps a particle each time) on a shared host: in three ``bench --huge`` runs of one afternoon
 its median run took 86.5, 85.4 and 78.0 s beside 16 MiB reads of 14>33, 24>31 and 104>20 ns
-(before>after) and 64 MiB reads of 103>117, 107>102 and 145>70; 16 MiB reads of 14 to 20 ns came
+(before>after) and 64 MiB reads of 103>117, 107>102 and 145>70 (each 6.1 MiB of its set, as
+``read_latency`` read short walks then); 16 MiB reads of 14 to 20 ns came
 beside 80.2 to 83.0 s, against 73.8 in the same steps hours before. They tell which runs shared
 their host, not by how much."""
 
@@ -89,11 +105,11 @@ def _walk(chain, at, reads):
     return at
 
 
-def _timed_walk(chain, reads) -> float:
-    """Nanoseconds of ``reads`` steps of the chain, compiled code only."""
+def _timed_walk(chain, at, reads):
+    """Nanoseconds of ``reads`` steps of the chain from word ``at``, compiled code only, and where they end."""
     start = time.perf_counter_ns()
-    _walk(chain, 0, reads)
-    return float(time.perf_counter_ns() - start)
+    end = _walk(chain, at, reads)
+    return float(time.perf_counter_ns() - start), end
 
 
 def latency_line(latency: dict) -> str:

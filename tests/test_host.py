@@ -1,8 +1,10 @@
-"""The host memory probe: its chain visits every cache line once, and it reports each working set."""
+"""The host memory probe: its chain visits every cache line once, its timed reads read the whole set, and it
+reports each working set."""
 
 import numpy as np
 import pytest
 
+from dlasweep import host
 from dlasweep.host import LINE, latency_line, one_cycle, read_latency
 
 
@@ -30,3 +32,22 @@ def test_read_latency_reports_every_working_set_in_order():
     assert list(latency) == [0.0625, 0.5]
     assert all(0 < ns < 1e4 for ns in latency.values())
     assert latency_line(latency).startswith("host memory, ns a read waiting on the last: 0.0625 MiB ")
+
+
+def test_every_timed_read_is_of_the_whole_set_even_when_reads_are_fewer_than_its_lines(monkeypatch):
+    # 0.5 MiB is 8192 lines; 1000 reads a walk. Each walk must go on where the last ended after a whole lap,
+    # or the timed reads would read the first 1000 lines again, a set of 62.5 KiB.
+    walks = []
+    real = host._walk
+
+    def recorded(chain, at, reads):
+        end = real(chain, at, reads)
+        walks.append((at, reads, end))
+        return end
+
+    monkeypatch.setattr(host, "_walk", recorded)
+    read_latency(working_sets=(0.5,), reads=1000, rounds=3)
+    (at, lap, end), *timed = walks
+    assert at == 0 and lap == 0.5 * 2**20 // LINE  # a whole lap first
+    assert [reads for _, reads, _ in timed] == [1000] * 3
+    assert [start for start, _, _ in timed] == [end] + [stop for _, _, stop in timed[:-1]]
