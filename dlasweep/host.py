@@ -44,7 +44,8 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
     lines read only its first ``reads`` lines again: ``shared_cache``'s reads
     (``READS // 10``) of 16 MiB read 6.1 MiB, those of 64 MiB 6.1 MiB strewn
     over 64 (bench.nc's ``host_read_*`` and ``memory_read_*`` before this
-    change; its closing ``host_read_ns`` did read each set). On one host at one
+    change; its closing ``host_read_ns``, of ``READS``, read every set to 61
+    MiB whole, with ``--quick`` to 6.1). On one host at one
     moment: 16 MiB in 42.1 to 46.5 ns a read that way, 140.7 a whole lap; 4,
     6 and 8 MiB 34.4, 34.7 and 37.3; 12 MiB 120.4.
     """
