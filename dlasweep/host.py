@@ -52,8 +52,9 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
     rng = np.random.default_rng(seed)
     latency = {}
     for mib in working_sets:
-        chain = one_cycle(max(int(mib * 2**20) // LINE, 2), rng)
-        at = _walk(chain, 0, max(reads, len(chain) // (LINE // 8)))
+        lines = max(int(mib * 2**20) // LINE, 2)
+        chain = one_cycle(lines, rng)
+        at = _walk(chain, 0, max(reads, lines))
         walks = []
         for _ in range(rounds):
             ns, at = _timed_walk(chain, at, reads)
