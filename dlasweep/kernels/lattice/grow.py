@@ -329,8 +329,11 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
             # no particle within two sites here: d >= 3
             free = r - (h_max if line else r_max)  # Euclidean, from the float position
             if line:
+                # the substrate (the row, plane, of height -1) bounds every jump as a particle does:
+                # the cluster's grids and pyramid do not hold it
                 d = min(max(d, np.int64(free)), period, q[up] + 1)
                 free = min(free, pos[up] + 1.0)
+                far = min(far, pos[up] + 1.0)
             square = d - rounding - JUMP_MARGIN  # half-width of the square (cube) free of particles
             reach = max(free - JUMP_MARGIN, square, far - rounding - JUMP_MARGIN)
             half = min(d - 1, top)
