@@ -116,7 +116,7 @@ def _moebius(u0, u1, rho):
 
 @inline
 def _poisson_cos(radius, inner, x):
-    """The cosine of the angle, seen from the centre and measured from the point's own
+    """The cosine of the angle, seen from the centre and counted from the point's own
     direction, at which Brownian motion from a point ``inner`` from the centre of a sphere of
     ``radius`` leaves the ball (3D, ``inner < radius``): its inverse distance to the exit point
     is uniform (``x`` a uniform draw)."""

@@ -90,21 +90,18 @@ def lattice_parents(points, moves, nseed, period):
     indices in tile order, a site's index at its tile's offset plus the
     occupied bits below its own. That costs 4 bytes a particle and 16 a tile
     held, about 5 bytes a particle in all (a dense int32 per site of each
-    tile cost 20 at 10^7), and neighbours share a tile or two (a hash table
-    took 3x as long in 2D and 5x in 3D at 1e6: a cache miss per neighbour).
+    tile costs several times that), and neighbours share a tile or two (a
+    hash table costs a cache miss per neighbour: docs/performance.md).
 
     The tiles are numbered in the directory's order, and the neighbours are
     looked up site after site in that order, each site read from its tile's
     word: the lookups then read memory close to where they last read, where
     in attachment order each particle's were a cache miss or more apart. The
     tile numbers are kept in ``parents`` until the last pass overwrites them.
-    On the points of clusters of 1e7 (seed 1, one core, a busy host): 3D 1.6
-    to 1.8 s against 3.6 to 4.1, 2D 0.83 against 1.1; at 1e5 9 ms against 10.
-    A growth's time is its kernel's and this pass's: 3D 1e7 1.55 s beyond the
-    kernel against 4.3. ``_earliest_neighbour`` called, not inlined: 2.0 s at
-    3D 1e7 (``borrow``), 3.1 and 3.4 (``jit``, counting references). The
-    directory's and the words' lines prefetched 16 particles ahead in the
-    passes in attachment order: 3D 1e7 1.5 s, 2D 0.86, 1e5 10 ms; not kept.
+    ``_earliest_neighbour`` is inlined (``_jit.inline``): called, it costs a
+    call per particle, and reference counting of its arrays under ``jit``.
+    The times, and a variant that prefetches in attachment order and does no
+    better: docs/performance.md.
 
     Parameters
     ----------

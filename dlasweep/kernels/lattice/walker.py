@@ -18,20 +18,9 @@ from .words import fine2, fine3, in_contact, mark_images, occupied, site_word, w
 FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
 """By dimension: where the centre pyramid bounds a site's distance by this much, no held coarse cell
 lies within the field's cap of the site's (a particle in one would lie within cap coarse cells less
-a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``).
-
-Measured and not kept: the field left unread, and a Brownian jump taken, wherever the pyramid's bound
-alone reaches ``CIRCLE_MIN`` (3D, seed 1, side by side, the cores swapped): 1e5 89.2 steps a particle
-against 86.3 in 1.044 and 1.097 times the time, 1e6 102.9 against 99.8 in 0.980 and 0.991; only where
-it reaches beyond the field's largest bound (21 sites), 1e5 86.8 steps in 1.023 and 1.006 times, 1e6
-100.2 in 0.999 and 1.003. Again at 1e7, the field unread wherever the pyramid's bound gives a jump
-beyond the largest cube the field allows (22.9 sites: its largest bound, 21, less one, plus the
-rounding and ``JUMP_MARGIN``), the pyramid's bound kept as a Chebyshev one there (3D lattice, seed
-1, side by side, the cores swapped; other clusters): 1.019 and 0.997 times the time, 116.5 steps a
-particle against 116.1; with a threshold of 23 sites and the field's largest bound in its place,
-0.978 and 0.974 times, 115.3 steps; at 1e5, seeds 1 to 8, 86.0 steps a particle on average against
-84.0, 5.55 s in all against 5.65. Within the spread that other clusters alone bring. The field's
-read is not what a far walker waits on."""
+a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``). Below this the field is
+read too: leaving it unread at lower thresholds gains nothing, as the field's read is not what a
+far walker waits on (docs/performance.md)."""
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into attach
 
 
@@ -228,15 +217,42 @@ def distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, 
     holds a copy of this body, spelled out. With ``from_far`` (the walker was
     released, returned or took a Brownian jump) the pyramid is read first, and
     the field's cell only where the pyramid's bound falls short of
-    ``FAR_CLEAR`` (the same bounds, the same clusters): side by side (seeds 1
-    and 2), 2D 1e7 0.939 and 0.922 times the time, 3D 3e6 0.913 and 0.995, 3D
-    1e7 1.015 (seed 1), on a host whose memory slows the large clusters more
-    (2D 1e7 on an earlier host: 1.010 and 0.984).
+    ``FAR_CLEAR``: the same bounds, with fewer reads of the field for the
+    walkers far from the cluster (docs/performance.md).
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    field : uint8 (...)
+        The Chebyshev field with the centre pyramid above it.
+    levels : int64 (L + 1,)
+        Where each level starts in ``field`` (``maps.pyramid_starts``).
+    dim : int
+        2 or 3.
+    width : int
+        The grid's side in sites.
+    nb0 : int
+        Words a side of the occupancy segment.
+    base1 : int
+        Where level 1 starts in ``words``.
+    nb1 : int
+        Words a side of level 1.
+    fw0 : int
+        The field's side in cells.
+    cap : int
+        The field's cap, ``FIELD_CAP[dim]``.
+    i, j, k : int
+        The site's cell in the grid (site + ``off``; k 0 in 2D).
+    from_far : bool
+        Whether the walker comes from far: then the pyramid is read first.
 
     Returns
     -------
     d : int
+        Chebyshev bound in sites (0: a particle may lie within two sites).
     far : float
+        Euclidean bound in sites from the pyramid, 0.0 where it gives none.
     """
     d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
     far = 0.0

@@ -85,8 +85,8 @@ pages then handed back to the OS.
 (With walkers > 1 both are still held during a rebuild: the box bounds them.)
 
 Speed note: numba counts the references of the arrays a function hands on,
-with atomic increments and decrements; perf found them taking 42% of a 2D
-growth (each inlined gather handed on 11 arrays). The walk, the attachment
+with atomic increments and decrements, a large share of a growth's time
+(each inlined gather hands on 11 arrays; docs/performance.md). The walk, the attachment
 and their helpers are therefore compiled by ``_jit.borrow``, without
 reference counting (they allocate nothing). The walk inlines the direction
 draw, the gather of the neighbour list and the ray cast (``walk.xdir``,

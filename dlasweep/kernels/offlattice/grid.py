@@ -83,8 +83,7 @@ def _allocate_maps(dim, gi):
     ``FS`` and up are read only where the field is at its cap with no
     pyramid above it (a substrate, a small grid): where the walk is near,
     level ``FS`` is set. With a pyramid they are left out, a quarter of the
-    maps and their marks (memory added by growth, 2D 1e7: 32.52 -> 32.25
-    bytes a particle). ``start`` is shifted so that level s still begins at
+    maps and their marks (the memory saved: docs/performance.md). ``start`` is shifted so that level s still begins at
     ``start[s]``.
     """
     pyramid = maps.pyramid_levels(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS]) > 1
@@ -146,14 +145,11 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     (the last, outside it, among them); the levels above the first are built
     from the held cells of the level below (``centres.levels_from_held``), as in
     the lattice's ``words.regrow``. Every stored value is a maximum or a union
-    over particles or held cells, so the order does not matter. Before, each
-    coarse cell lowered the pyramid about it, (2 ``FCAP`` - 1)**dim cells of the
-    first level; a rebuild now costs a particle its insert, its level-1 marks and
-    the reads of the copy: the last rebuild of a cluster of 1e6 (from the grid
-    of two thirds of its extent), 2D 0.101 s against 0.271, 3D 0.252 against
-    0.634; of 1e5 0.014 against 0.039 and 0.035 against 0.055. The growth, the
-    same clusters: 2D 1e7 side by side 0.92 and 0.98 times the time; 3D 1e6 on
-    one core, three runs each, 25.33 s against 25.34. ``old_field``'s pages go
+    over particles or held cells, so the order does not matter. A rebuild
+    costs a particle its insert, its level-1 marks and the reads of the copy,
+    not the (2 ``FCAP`` - 1)**dim cells of the first level that marking its
+    coarse cell again would lower (the rebuilds' times: docs/performance.md).
+    ``old_field``'s pages go
     back to the OS once copied. Without a first level in both grids each coarse
     cell lowers the pyramid once (from the first particle pushed on its cell
     list's cell of those in it). Substrates (whose cell list's cells are not
@@ -245,9 +241,8 @@ centres lie within a cell's diagonal of w (w's own and those ``centre_bound`` re
 centre field's cap, every particle ``field_reach`` or more from their centres, and the field
 bounds less than the pyramid. A walker that comes from far (the launch circle, a return to it, a
 ball's exit) reads the pyramid first and, beyond this, not the field (``walk_bound``): the same
-bound and ball, the same clusters. Side by side (one core each, seeds 1 and 2): 2D 1e7 0.864 and
-0.918 times the time, 3D 3e6 0.877 (seed 1); 2D 1e6 1.012 and 1.014, 3D 1e6 1.002 and 1.091: the
-field's cells about the cluster's far walkers outgrow the caches."""
+bound and ball, the same clusters: the field's cells about the cluster's far walkers outgrow the
+caches, so a large cluster's far walkers gain the most from not reading them (docs/performance.md)."""
 NEAR = 2.0
 """Where the centre field bounds no more than this, the level-1 map decides:
 clear, every centre lies 2 or more away; set, the walker takes the neighbour list."""
