@@ -16,6 +16,8 @@ pyramid's above it, from the walker's own (``centre_gap``, ``pyramid_dist``).
 Values are stored as the cap less the
 distance, so that an unwritten page means the cap and costs no memory; the
 levels share one array laid out by ``maps.pyramid_starts``.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import math

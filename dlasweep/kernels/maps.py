@@ -16,6 +16,8 @@ maps; the centre pyramid (``centres``) stacks coarser fields above it in the
 same array (``pyramid_starts``), so that a walker far from the cluster reads
 a bound from a small array (beside periodic sides the off-lattice walk
 searches the maps instead).
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import mmap

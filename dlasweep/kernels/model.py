@@ -59,7 +59,7 @@ exactly, or is killed beyond ``kill_factor`` times its radius, or neither
 
 
 def model_from(p) -> Model:
-    """The kernels' ``Model`` from a dict that ``dlasweep.params.resolve`` returned."""
+    """The kernels' ``Model`` from ``p``, a dict that ``dlasweep.params.resolve`` returned."""
     launch_box = p["launch"] == "box"
     boxed = p["size"] > 0 and p["seed_shape"] != "line"
     return Model(
@@ -97,7 +97,8 @@ def sticks(stickiness, rng):
 @inline
 def sticks_xo(stickiness, s0, s1, s2, s3):
     """``sticks`` with the draw from the xoshiro256+ stream held in registers
-    (``walk.xo``): whether it sticks, and the stream's new state.
+    (``s0`` .. ``s3``, ``walk.xo``): whether it sticks with probability
+    ``stickiness``, and the stream's new state.
 
     Inlined into the lattice walk's hot loop; written with one return, as
     numba's inlining of a function with two makes that loop slower
@@ -112,8 +113,9 @@ def sticks_xo(stickiness, s0, s1, s2, s3):
 
 @jit
 def checkpoint(marks, times, passed, count, t0):
-    """Record the clock for every mark that ``count`` particles reach; returns
-    how many marks have passed (the caller passes it back in)."""
+    """Record the clock, in seconds since ``t0`` (``_jit.clock``), into ``times`` for every
+    mark of ``marks`` that ``count`` particles reach; returns how many marks have passed
+    (``passed``: the caller passes it back in)."""
     while passed < len(marks) and marks[passed] <= count:
         times[passed] = clock() - t0
         passed += 1
@@ -122,7 +124,7 @@ def checkpoint(marks, times, passed, count, t0):
 
 def grown(points, steps, parents, count, status, times, seconds):
     """A kernel's result as ``dlasweep.grow`` takes it: the first ``count``
-    points, diffusion times and parents (copied when growth stopped short, so
+    points, diffusion times (``steps``) and parents (copied when growth stopped short, so
     that the unused tail is freed), the status code, the times and the seconds
     the growth took in all."""
     if count < len(points):

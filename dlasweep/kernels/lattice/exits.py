@@ -25,7 +25,8 @@ FACE_MODES = 41  # odd Fourier modes up to this in face_law: the next weighs bel
 
 @cache
 def unit_moves(dim, moore):
-    """Unit moves (and contacts): nearest neighbours or the Moore set, built once a process
+    """Unit moves (and contacts) in ``dim`` dimensions: nearest neighbours, or with ``moore``
+    the Moore set, as int64 (M, 3) rows; built once a process
     (``functools.cache``): a small cluster grows in milliseconds (docs/performance.md)."""
     grid = np.stack(np.meshgrid(*([np.arange(-1, 2)] * dim), indexing="ij"), -1).reshape(-1, dim)
     norm = np.abs(grid).sum(1)

@@ -4,6 +4,8 @@ side, the cap less its distance in cells to the nearest cell that holds a partic
 Marked particle by particle (``field_lower``) or filled from the held cells at a rebuild
 (``field_fill``); stored in the tiles of ``maps.field_cell``, in whole bytes or two cells a byte
 (``FIELD_PACKED``). The centre pyramid (``centres``) stacks its levels above it in one array.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np

@@ -7,7 +7,9 @@ plane seed: its height is 0) has parent -1, the substrate being there
 first, and so have the seed particles. The sites occupied when particle i
 stuck are those of particles 0..i-1 (a site is never filled twice), so the
 parents follow from the positions alone: this pass over them finds exactly
-what the walk touched, and the walk's hot loop stays as it was.
+what the walk touched, and the walk's hot loop keeps no record of contacts.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -96,7 +98,7 @@ def lattice_parents(points, moves, nseed, period):
     The tiles are numbered in the directory's order, and the neighbours are
     looked up site after site in that order, each site read from its tile's
     word: the lookups then read memory close to where they last read, where
-    in attachment order each particle's were a cache miss or more apart. The
+    in attachment order each particle's are a cache miss or more apart. The
     tile numbers are kept in ``parents`` until the last pass overwrites them.
     ``_earliest_neighbour`` is inlined (``_jit.inline``): called, it costs a
     call per particle, and reference counting of its arrays under ``jit``.
@@ -178,7 +180,13 @@ def lattice_parents(points, moves, nseed, period):
 
 @inline
 def _earliest_neighbour(i, q0, q1, q2, moves, dim, period, lo, side, directory, words, offsets, index):
-    """The earliest particle before particle i, at site q, among q's neighbours (``moves``); -1 for none."""
+    """The earliest particle before particle i, at site q = (q0, q1, q2), among q's neighbours
+    (``moves``); -1 for none.
+
+    ``period`` wraps a substrate's sides; ``lo`` and ``side`` are the box (``_box``);
+    ``directory``, ``words``, ``offsets`` and ``index`` the site index that ``lattice_parents``
+    builds: each tile's number, its occupied sites' bits, its start in ``index``, and the
+    particles' numbers in tile order."""
     best = -1
     for m in range(moves.shape[0]):
         n0, n1, n2 = q0 + moves[m, 0], q1 + moves[m, 1], q2 + moves[m, 2]

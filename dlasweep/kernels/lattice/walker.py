@@ -32,7 +32,8 @@ def site(x):
 
 @borrow
 def outside(q, dim, line, lo, hi):
-    """Whether site q has left the box (for substrates: through the top)."""
+    """Whether site q (int64 (3,)) has left the box, sites ``lo`` to ``hi`` on each of ``dim`` axes
+    (with ``line``, a substrate's: through the top)."""
     if line:
         return q[dim - 1] > hi
     for a in range(dim):
@@ -49,6 +50,29 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
     cluster, else it steps (staying put when the neighbour is occupied).
     ``near`` False promises that no particle is within two sites, which
     spares the contact and occupancy tests. Returns whether it stuck.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The walker's site, moved.
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts.
+    period : int
+        A substrate's period; 0: none.
+    stickiness : float
+        The probability of sticking at a contact.
+    rs : uint64 (4,)
+        The xoshiro256+ stream.
+    near : bool
+        Whether a particle may lie within two sites.
     """
     up = dim - 1
     line = period > 0
@@ -77,6 +101,35 @@ def near_walk(
 
     It stops, without sticking, after ``budget`` steps (0: no limit), on
     leaving the box or beyond ``radius`` (0: none).
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The walker's site, moved.
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts.
+    period : int
+        A substrate's period; 0: none.
+    stickiness : float
+        The probability of sticking at a contact.
+    rs : uint64 (4,)
+        The xoshiro256+ stream.
+    boxed : bool
+        Whether the box's walls end the walk.
+    lo, hi : int
+        The box's lowest and highest site on each axis.
+    radius : float
+        Kill (or return) radius beyond which the walk ends; 0: none.
+    budget : int
+        Most steps; 0: no limit.
 
     Returns
     -------
@@ -108,7 +161,29 @@ def near_walk(
 def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
     """Whether site q touches a particle (or the substrate) under ``moves``:
     ``words.in_contact`` as the single walker's hot loop reads the words,
-    where ``_grow`` holds a copy of this body, spelled out."""
+    where ``_grow`` holds a copy of this body, spelled out.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words, the occupancy first.
+    dim : int
+        2 or 3.
+    nb0 : int
+        Words a side of the occupancy segment.
+    width, off : int
+        The grid's side in sites, and its offset.
+    q : int64 (3,)
+        The site.
+    moves : int64 (M, 3)
+        The contacts.
+    nm : int
+        ``len(moves)``.
+    line : bool
+        Whether the seed is a substrate.
+    period : int
+        A substrate's period.
+    """
     touch = False
     for m in range(nm):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
@@ -130,7 +205,17 @@ def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
 def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1, s2, s3):
     """One lattice step from site q to a random neighbour, into ``pos``
     unless the neighbour is occupied (or below the substrate); the stream
-    in registers, returned. ``_grow`` holds a copy of this body, spelled out."""
+    in registers, returned. ``_grow`` holds a copy of this body, spelled out.
+
+    Parameters
+    ----------
+    words, dim, nb0, width, off, q, moves, nm, line, period
+        As ``touches`` takes them.
+    pos : float64 (3,)
+        Receives the new site.
+    s0, s1, s2, s3 : uint64
+        The xoshiro256+ state (``walk.xo``).
+    """
     s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
     m = np.int64(u * nm)
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
@@ -153,6 +238,27 @@ def attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
     new count, r_max, h_max, the grid's width and offset, and whether it was
     outgrown: the caller then builds a larger one from it (``words.regrow``), which marks
     this one.
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        Receives the site in row ``count``.
+    steps : uint32 (n,)
+        Receives the diffusion time.
+    count : int
+        Particles before this one.
+    pending : int
+        Its steps since the last attachment.
+    q : int64 (3,)
+        The site.
+    dim : int
+        2 or 3.
+    period : int
+        A substrate's period; 0: none.
+    r_max, h_max : float
+        The cluster's radius and height so far.
+    grid : tuple
+        The grid.
     """
     words, start, blocks, cells, field, width, off = grid
     line = period > 0
@@ -184,6 +290,25 @@ def release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
     ``box_hi`` (``size`` of them) on each axis (``launch_box``; a substrate's
     box: its top), else a uniform point at height ``launch_r`` above the
     substrate, else of the launch circle (sphere) of radius ``launch_r``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the place.
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    launch_box : bool
+        Whether walkers start on the box's surface.
+    size : int
+        The box's side in sites (a substrate's period).
+    box_lo, box_hi : int
+        The box's lowest and highest site on each axis.
+    launch_r : float
+        The launch radius (a substrate's: launch height).
+    pos : float64 (3,)
+        Receives the place.
     """
     up = dim - 1
     if launch_box:

@@ -27,6 +27,29 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
     ``field.field_fill`` to complete, flagging its tiles in ``held``; growth
     passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly
     held is recorded in the centre pyramid above the field.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    cells : int64 (S,)
+        Cells a side of each segment.
+    field : uint8 (...)
+        The Chebyshev field with the centre pyramid above it.
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The particle's site.
+    period : int
+        A substrate's period (its images one period to each side are marked); 0: none.
+    cap : int
+        1 or ``FIELD_CAP[dim]``, as above.
+    held : uint8 (T,) or (0,)
+        Flags of the field's tiles that hold a particle, for ``field_fill``.
     """
     fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
     levels = maps.pyramid_levels(dim, width, FIELD_CAP[dim])
@@ -51,6 +74,27 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
 
 @jit
 def rebuild(points, count, dim, width, off, period):
+    """A grid for the first ``count`` particles: the occupancy and level-1 words, the
+    Chebyshev field (filled from the held cells: ``field.field_fill``) and the centre pyramid.
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        The sites, attachment order.
+    count : int
+        Particles to mark.
+    dim : int
+        2 or 3.
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    period : int
+        A substrate's period; 0: none.
+
+    Returns
+    -------
+    words, start, blocks, cells, field
+        The grid (``maps.allocate`` with two segments, ``maps.pyramid_allocate``).
+    """
     words, start, blocks, cells = maps.allocate(dim, width, 2)  # occupancy and level 1: the near test
     field = maps.pyramid_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
@@ -162,6 +206,8 @@ def regrow(points, count, dim, width, off, period, old):
 
 @jit
 def occupied(words, dim, start, blocks, width, off, q0, q1, q2):
+    """Whether site (q0, q1, q2) holds a particle; False outside the grid of side ``width``
+    and offset ``off`` (``words``, ``start``, ``blocks``: its words and their layout; ``dim`` 2 or 3)."""
     i, j, k = q0 + off, q1 + off, q2 + off
     if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
         return False
@@ -174,6 +220,17 @@ def site_word(dim, nb, width, off, q0, q1, q2):
 
     Scalars only, for the hot loop, which reads the word itself: a helper
     that takes the array costs atomic reference counting per call.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    nb : int
+        Words a side of the occupancy segment.
+    width, off : int
+        The grid's side in sites, and its offset.
+    q0, q1, q2 : int
+        The site.
     """
     i, j, k = q0 + off, q1 + off, q2 + off
     if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
@@ -183,7 +240,9 @@ def site_word(dim, nb, width, off, q0, q1, q2):
 
 @jit
 def in_contact(words, dim, start, blocks, width, off, q, moves, period):
-    """Whether site q touches a particle (or the substrate) under ``moves``."""
+    """Whether site q (int64 (3,)) touches a particle (or the substrate) under ``moves``
+    (int64 (M, 3)): ``occupied`` of each neighbour in the grid ``words``, ``dim``, ``start``,
+    ``blocks``, ``width``, ``off``, its first coordinates wrapped by ``period`` (0: none)."""
     for m in range(moves.shape[0]):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
         if period > 0:
@@ -199,7 +258,7 @@ def in_contact(words, dim, start, blocks, width, off, q, moves, period):
 
 @jit
 def _row2(w0, w1, w2, t):
-    """Row t (0..7) of three 8x8 words side by side: 24 sites as bits."""
+    """Row t (0..7) of the three 8x8 words ``w0``, ``w1``, ``w2`` side by side: 24 sites as bits."""
     shift = np.uint64(8 * t)
     return (
         ((w0 >> shift) & np.uint64(255))
@@ -210,7 +269,8 @@ def _row2(w0, w1, w2, t):
 
 @jit
 def word_at(words, dim, nb, x, y, z):
-    """Word (x, y, z) of the occupancy segment, empty outside the grid."""
+    """Word (x, y, z) of the occupancy segment of ``words`` (``nb`` words a side, ``dim`` 2 or 3),
+    empty outside the grid."""
     inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
     return words[maps.block_word(dim, 0, nb, x, y, z)] if inside else np.uint64(0)
 
@@ -219,7 +279,7 @@ def word_at(words, dim, nb, x, y, z):
 def fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
     """Chebyshev distance from site (x, y) of word b1 to the nearest particle, capped at 9.
 
-    ``a*``, ``b*``, ``c*`` are the 3x3 words (8x8 sites each, rows a below)
+    ``a0``..``a2``, ``b0``..``b2``, ``c0``..``c2`` are the 3x3 words (8x8 sites each, rows a below)
     around the walker's, which cover 8 sites on every side, so the result is
     exact below the cap. Rows of 24 sites are OR-ed outwards from the
     walker's row; the square of half-width r is hit when the OR of its rows
@@ -255,7 +315,7 @@ def _band(x, r, a, width):
 @jit
 def _masks(x, r, width, repeat):
     """Masks of sites x - r..x + r along one axis in its three words: ``_band``
-    repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
+    (groups of ``width`` bits) repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
     return (
         _band(x, r, 0, width) * np.uint64(repeat),
         _band(x, r, 1, width) * np.uint64(repeat),

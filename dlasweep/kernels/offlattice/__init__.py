@@ -77,7 +77,7 @@ and ``celllist.sort_tail``, so that a gather reads a cell's particles from a str
 extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk
 loop's next pass: numba frees an array held across a loop's passes only
-when the pass ends, so building them in the same pass held both. The
+when the pass ends, so building them in the same pass would hold both. The
 centre field alone (with the pyramid above it) is kept until the new grid
 has copied it and the pyramid's first level (``grid.regrow_grid``: no
 particle lowers their cells again but those near the old grid's edge), its

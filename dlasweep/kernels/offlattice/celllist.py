@@ -7,6 +7,8 @@ used tile holds its cells' heads, the first of a linked list through ``nxt``
 of the particles' rows. The rows may be stored cell after cell
 (``sort_cells``, ``sort_tail``): the lists then link rows, and the caller
 keeps each row's attachment number.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -39,7 +41,23 @@ def _cell_of(i, pts, dim, gi, gf):
 @borrow
 def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     """Push particle i on its cell's list. False, and nothing changed, when
-    its tile is new and the heads are full (give them ``more_heads``)."""
+    its tile is new and the heads are full (give them ``more_heads``).
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The links through the rows; ``nxt[i]`` receives the list's old first row.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
+    """
     t, loc = _cell_of(i, pts, dim, gi, gf)
     tile = dirr[t] - 1
     if tile < 0:
@@ -66,6 +84,23 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
     permutation is followed cycle by cycle in place. The tiles keep the
     numbers they were given as they filled (renumbering them in the
     directory's order first gains nothing: docs/performance.md).
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres, moved row by row.
+    order : int32 (n,)
+        Each row's attachment number, moved with its row.
+    nxt : int32 (n,)
+        Scratch, then the links through the sorted rows.
+    count : int
+        Particles to sort.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles, and the cells' heads (scratch, then the lists' first rows).
     """
     used = gi[TILES_USED] * 64
     heads[:used] = 0
@@ -121,6 +156,25 @@ def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
     ``first``, not the cluster, and their runs replace a gather's reads of
     one scattered row each. ``nxt`` of those rows serves as scratch; three
     arrays of at most ``count - first`` int32 are allocated.
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres; rows ``first`` to ``count - 1`` are moved.
+    order : int32 (n,)
+        Each row's attachment number, moved with its row.
+    nxt : int32 (n,)
+        The links through the rows.
+    first : int
+        The rows below it are sorted already.
+    count : int
+        Particles in the cluster.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
     """
     n = count - first
     below = np.empty(n, np.int32)  # per cell of the tail: its list's first row below ``first``
@@ -164,7 +218,8 @@ def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
 
 @jit
 def attachment_order(pts, order, count):
-    """Put the rows of ``pts`` back in attachment order (undo ``sort_cells``), in place."""
+    """Put the first ``count`` rows of ``pts`` back in attachment order (undo ``sort_cells``), in place,
+    from ``order``, each row's attachment number."""
     for i in range(count):
         while order[i] != i:
             j = order[i]
@@ -189,7 +244,23 @@ def empty_heads(dim, tiles):
 
 @jit
 def insert_all(pts, count, nxt, dim, gi, gf, dirr, heads):
-    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled)."""
+    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled).
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres.
+    count : int
+        Particles to push.
+    nxt : int32 (n,)
+        Receives the links through the rows.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
+    """
     for i in range(count):
         while not insert(i, pts, nxt, dim, gi, gf, dirr, heads):
             heads = more_heads(heads)
@@ -273,7 +344,7 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     m = (1 << tb) - 1
     half = 0.5 * size
     # first the heads of the window's cells, kept at the end of li, then their lists: the
-    # reads of the lists' first particles no longer wait on one another
+    # reads of the lists' first particles do not wait on one another
     top = len(li) - 1
     nh = 0
     for k2 in range(lo2, hi2 + 1):

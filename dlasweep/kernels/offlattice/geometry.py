@@ -44,7 +44,11 @@ GF_SLOTS = 8
 @jit
 def layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
-    for point seeds, h_max for a substrate), with room to grow."""
+    for point seeds, h_max for a substrate), with room to grow: ``gi`` and ``gf``.
+
+    ``dim`` is 2 or 3; ``line`` whether the seed is a substrate, whose
+    period is ``size``; else ``size`` is the box's side (0: no box), which
+    bounds the grid."""
     gi = np.zeros(GI_SLOTS, np.int64)
     gf = np.zeros(GF_SLOTS)
     tb = 3 if dim == 2 else 2

@@ -13,6 +13,8 @@ layout).
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
 field)`` that ``build_grid`` returns: the geometry (``geometry.layout``), the
 maps, the cell list's directory and heads (``celllist``), and the field.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -51,7 +53,27 @@ from .geometry import (
 @borrow
 def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
     """Mark particle i in the maps, the centre field and the centre pyramid above
-    it (where its coarse cell is newly held), with its periodic images near the edges."""
+    it (where its coarse cell is newly held), with its periodic images near the edges.
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts : float64 (n, dim)
+        The particles' centres.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry (``geometry.layout``).
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout: where each level starts, its words and its cells a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     W = gi[MAP_WIDTH]
     reach = 1 if gi[PERIODIC] == 1 else 0
     reach2 = reach if dim == 3 else 0
@@ -124,7 +146,32 @@ def _empty_grid(dim, line, size, need, tiles):
 @jit
 def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     """Maps and cell list for particles 0..count-1, sized for ``need``, with
-    room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
+    room for ``tiles`` cell-list tiles (the old grid's count: few change).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    size : int
+        The box's side, or a substrate's period.
+    need : float
+        The cluster's extent to cover: max |coordinate|, or h_max above a substrate.
+    pts : float64 (n, dim)
+        The particles' centres.
+    count : int
+        Particles to put in the grid.
+    nxt : int32 (n,)
+        Receives the cell list's links.
+    tiles : int
+        Cell-list tiles to make room for.
+
+    Returns
+    -------
+    gi, gf, words, start, blocks, cells, dirr, heads, field
+        The grid (the module docstring).
+    """
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
     heads = insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
     for i in range(count):
@@ -154,6 +201,15 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     cell lowers the pyramid once (from the first particle pushed on its cell
     list's cell of those in it). Substrates (whose cell list's cells are not
     coarse cells) are built anew.
+
+    Parameters
+    ----------
+    dim, line, size, need, pts, count, nxt, tiles
+        As ``build_grid`` takes them; ``tiles`` is the old grid's count.
+    old_gi : int64 (GI_SLOTS,)
+        The outgrown grid's geometry.
+    old_field : uint8 (...)
+        The outgrown grid's centre field and pyramid; its pages go back to the OS.
     """
     if line:
         return build_grid(dim, line, size, need, pts, count, nxt, tiles)
@@ -220,7 +276,8 @@ def _first_in_coarse_cell(i0, i1, i2, j, pts, nxt, dim, gi):
 
 @jit
 def face_gap(X0, X1, X2, dim, s):
-    """Distance from the grid point X to the nearest face of its cell of side ``2**s``.
+    """Distance from the grid point X = (X0, X1, X2) to the nearest face of its cell of side ``2**s``
+    (X2 read only where ``dim`` is 3).
 
     Scalars only, so that the walk's hot loop pays no reference counting.
     """
@@ -263,6 +320,23 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     set (look closer), -1 off the map. At the field's cap, away from periodic
     sides, the centre pyramid above the field bounds instead of the maps
     (``pyramid_dist``). (``walker.walk_to_contact`` spells this out inline.)
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The point (z 0 in 2D).
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry.
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout: where each level starts, its words and its cells a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
     """
     W = gi[MAP_WIDTH]
     x0 = w[0]
@@ -308,7 +382,8 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 
 @jit
 def walk_geometry(gi, cells, dim):
-    """The grid's scalar constants that ``walk_bound`` takes, worked out once per walk:
+    """The scalar constants of the grid ``gi`` (its maps' ``cells`` a side by level) that
+    ``walk_bound`` takes, worked out once per walk:
     (periodic, m0, m1, m2, W, fw, flo, ftop). (The centre pyramid's
     level starts, an array, come from
     ``level_starts`` once per grid: the walk allocates nothing.)"""
@@ -325,7 +400,8 @@ def walk_geometry(gi, cells, dim):
 
 @jit
 def level_starts(gi, dim):
-    """Where each level of the grid's distance pyramid starts (``maps.pyramid_starts``)."""
+    """Where each level of the distance pyramid of the grid ``gi`` (its geometry) in ``dim``
+    dimensions starts (``maps.pyramid_starts``)."""
     return maps.pyramid_starts(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
 
 
@@ -349,6 +425,37 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     of w's cell of the pyramid level that holds no particle centre, w's distance to that centre
     and the level's shift, from which the walk jumps out of that ball; elsewhere a radius of 0.0
     (the distance and shift are then those of a pyramid read that gave no bound, or 0.0 and 0).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre; its periodic coordinates are wrapped in place.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    per : bool
+        Whether the grid is periodic (``walk_geometry``).
+    m0, m1, m2 : float
+        Where coordinate 0 falls in the maps, per axis.
+    W : float
+        The maps' side in unit cells.
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The maps' layout: where each level starts, and its words a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    fw : int
+        The centre field's side in coarse cells.
+    flo : int
+        The highest map level known clear where the field is at its cap.
+    ftop : int
+        One past the highest map level searched.
+    pstart : int64 (L + 1,)
+        Where each level starts in ``field`` (``level_starts``).
+    far : bool
+        Whether the walker comes from far: then the pyramid is read first.
     """
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1

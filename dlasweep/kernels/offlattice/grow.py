@@ -201,7 +201,8 @@ def _grow_each(dimension, lockstep, n, model, marks, rngs, times):
 def grow_offlattice(n, p, marks, rngs, times=None):
     """Grow off-lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow``.
 
-    Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
+    Takes (``n``, ``p``, ``marks``, ``rngs``, ``times``) and returns what
+    ``lattice.grow_lattice`` does, but ``points`` are
     the float64 centres of unit-diameter disks (spheres), (n_grown, dim), and
     a parent is the particle touched at contact (``contact.settle``).
     """

@@ -49,7 +49,27 @@ def release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
     """Put a new walker at w: uniformly on the launch circle (sphere), on the
     launch line (plane) above a substrate, or, with ``launch_box``, on the
     box's faces (its top face above a substrate). Returns the stream state
-    (registers: see ``walk.xdir``)."""
+    (registers: see ``walk.xdir``).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        Receives the walker's place.
+    dim : int
+        2 or 3.
+    size : int
+        The box's side, or a substrate's period.
+    line : bool
+        Whether the seed is a substrate.
+    launch_box : bool
+        Whether walkers start on the box's faces.
+    launch_r : float
+        The launch radius (a substrate's: launch height).
+    rng : numpy.random.Generator
+        Draws the place on a line or box.
+    s0, s1, s2, s3 : uint64
+        The xoshiro256+ state that draws a direction on the launch circle.
+    """
     up = dim - 1
     hb = 0.5 * size
     if launch_box:
@@ -349,7 +369,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 continue
             if step == 0.0 and jumps and g >= EPS:
                 # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
-                # holds the copies together): one condition for both was slower
+                # holds the copies together): one condition for both is slower
                 # (docs/performance.md), so the tested shape stays
                 s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 w[0] += g * u0
@@ -442,7 +462,48 @@ def attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim,
     Returns the new count and ``IN_GRID``, ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
     cell-list tiles (then the particle is not yet in the grid: the caller
     drops it and builds a larger one). It takes the grid's arrays one by one
-    and returns none: a tuple of them cost reference counting at each particle."""
+    and returns none: a tuple of them would cost reference counting at each particle.
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre at contact; wrapped onto a substrate's period.
+    parent : float
+        The row of ``pts`` it touched, -1 for the substrate (``normal[3]``).
+    count : int
+        Particles before this one: its row.
+    pending : int
+        Its steps since the last attachment, stored as its diffusion time.
+    pts : float64 (n, dim)
+        Receives its centre in row ``count``.
+    order : int32 (n,) or (0,)
+        Each row's attachment number where the rows are stored by cell; empty otherwise.
+    steps : uint32 (n,)
+        Receives its diffusion time.
+    parents : int32 (n,)
+        Receives its parent's attachment number.
+    nxt : int32 (n,)
+        The cell list's links through the rows.
+    geo : float64 (3,)
+        The cluster's r_max, Chebyshev extent and h_max, updated.
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    size : int
+        A substrate's period.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``); ``attach`` reads the extent
+        it covers and its count of tiles.
+    words : uint64 (...)
+        The dilated maps.
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout (``maps.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads (``celllist``).
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     up = dim - 1
     if line:
         for a in range(up):
@@ -473,7 +534,30 @@ def attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim,
 
 @jit
 def index_late(i, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr, heads, field):
-    """Put particle i, which found the heads full, in the grid; returns the larger heads."""
+    """Put particle i, which found the heads full, in the grid; returns the larger heads.
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts, nxt : float64 (n, dim), int32 (n,)
+        The centres and the cell list's links.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``); ``attach`` reads the extent
+        it covers and its count of tiles.
+    words : uint64 (...)
+        The dilated maps.
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout (``maps.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads (``celllist``).
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     heads = more_heads(heads)
     insert(i, pts, nxt, dim, gi, gf, dirr, heads)
     mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
