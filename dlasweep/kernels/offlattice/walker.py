@@ -115,9 +115,9 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
     (``_jit.borrow``: no reference counting, nothing allocated here: see the
     package note); the stream's state stays in registers (``s0`` .. ``s3``)
     and is written back to ``rs`` around the calls that draw from it; the map
-    query is spelled out rather than called. A single walker in flight is
-    the design kept: interleaving two walkers' steps so that their memory
-    reads overlap saves no more than keeping their two states costs
+    query is spelled out rather than called. One walker is in flight at a
+    time: interleaving two walkers' steps, so that their memory reads
+    overlap, would save no more than keeping their two states costs
     (docs/performance.md).
 
     Parameters
