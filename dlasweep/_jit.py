@@ -34,8 +34,8 @@ jit = numba.njit(**_SETTINGS)
 borrow = numba.njit(**_SETTINGS, _nrt=False)
 """Decorator for a hot kernel that only borrows arrays: numba's reference
 counting off, so that handing arrays on (to a helper it inlines or calls)
-costs no atomic increment and decrement. Measured with perf: 42% of a 2D
-off-lattice growth went to them. Such a kernel must allocate no array and
+costs no atomic increment and decrement, which otherwise take a large share
+of a growth (see docs/performance.md). Such a kernel must allocate no array and
 keep none a callee returns: it would never be freed (``test_borrow`` counts
 numba's allocations across each growth kernel)."""
 owning = numba.njit(**_SETTINGS, _nrt=True)
@@ -46,8 +46,9 @@ borrows. A ``jit`` kernel takes numba's reference counting from the caller it is
 starts at every step of the lockstep walkers compiled after it (``test_borrow`` counts the allocations, and
 follows every borrowing kernel's calls to find such a helper)."""
 inline = numba.njit(**_SETTINGS, inline="always")
-"""Decorator for small scalar helpers inlined at numba level. Measured: on the
-lattice kernel's array-taking helpers it made the kernel 1.5x slower."""
+"""Decorator for small scalar helpers inlined at numba level. Only for scalar
+helpers: numba-level inlining of the lattice kernel's array-taking helpers
+made the kernel slower, not faster (see docs/performance.md)."""
 
 
 def call_literal(kernel, first, *args):
@@ -55,9 +56,19 @@ def call_literal(kernel, first, *args):
 
     Called plainly, numba's dispatcher first tries to compile the kernel for an
     int (the literal is asked for only once typing reaches ``literally``), at
-    every call: 7 ms a call of a growth kernel (300 lattice clusters of 1000
-    grown in a loop: 2.9 s, through this 0.65 s). ``compile`` of the literal
-    signature finds the compiled overload at once.
+    every call, which costs more than a small cluster's growth (see
+    docs/performance.md). ``compile`` of the literal signature finds the
+    compiled overload at once.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        A kernel whose first argument is a literal (``numba.literally``).
+    first : int
+        That argument's value, the dimension: the kernel is compiled (or
+        loaded from numba's cache) for it.
+    *args
+        The kernel's other arguments, typed as they are passed.
     """
     signature = (numba.types.literal(first),) + tuple(numba.typeof(a) for a in args)
     return kernel.compile(signature)(first, *args)
@@ -75,7 +86,7 @@ def cached(kernel, first, *more) -> bool:
 
 
 # The growth kernels take a batch's generators as a Python list: numba's
-# typed list took 14 us a generator to build, more than the call it saves.
+# typed list costs more a generator to build than the call it saves (docs/performance.md).
 warnings.filterwarnings("ignore", message="(?s).*reflected list", category=NumbaPendingDeprecationWarning)
 # ``maps.zeroed`` maps its largest arrays in object mode (``maps._unreserved``), a call that holds the
 # GIL once a regrid: numba warns of it at every load of each kernel that calls it.
@@ -119,8 +130,9 @@ def prefetch(typingctx, array, index):
 def clock():
     """Seconds from the monotonic clock (``time.CLOCK_MONOTONIC``), callable from kernels without the GIL.
 
-    With the GIL (numba's object mode, as it was), a kernel of a sweep's
-    thread waited at each checkpoint while another thread ran Python.
+    It reads the C library's ``clock_gettime`` without the GIL, so that a
+    kernel of a sweep's thread does not wait at each checkpoint while another
+    thread runs Python, as it would in numba's object mode.
     """
     timespec = np.empty(2, np.int64)  # seconds, nanoseconds: a struct timespec on 64-bit systems
     _clock_gettime(time.CLOCK_MONOTONIC, _address(timespec))

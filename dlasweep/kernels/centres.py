@@ -16,6 +16,8 @@ pyramid's above it, from the walker's own (``centre_gap``, ``pyramid_dist``).
 Values are stored as the cap less the
 distance, so that an unwritten page means the cap and costs no memory; the
 levels share one array laid out by ``maps.pyramid_starts``.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import math
@@ -29,48 +31,23 @@ FS = maps.FIELD_SHIFT
 """The centre field's coarse cells have side 2**FS (the lattice kernel's field is the same)."""
 FCAP = (16, 6)
 """Cap of the centre pyramid's levels (their cells), 2D and 3D. A newly held cell of
-the level below costs (2 cap - 1)**dim updates, hence 3D's smaller cap; larger 3D caps
-did not shorten the walk: a 3D lattice cluster of 1e6 (seed 1) took 98.7 steps a
-particle with a cap of 8 and 99.2 with 10, against 99.8 with 6.
+the level below costs (2 cap - 1)**dim updates, hence 3D's smaller cap; larger caps,
+on every level or on the upper ones alone, shorten the walk little and cost their
+updates (docs/performance.md).
 
-The levels hold Euclidean distances from their cells' centres, where the
-Chebyshev pyramid before them held whole cells between cells: the bound far from
-the cluster went from about 0.72 of the distance to about 0.9, and a walker's way
-in from the launch circle takes fewer jumps, a difference that grows with the
-cluster. Side by side (seed 1; 3D 1e5 seeds 1 and 2): 2D 1e6 4.94 s against 5.32
-(54.9 steps a particle against 61.4), 2D 1e7 64.37 against 74.80 (58.5 against
-72.3), 3D 1e5 2.30 against 2.34 (112.2 against 124.0), 3D 1e6 15.31 against 18.19
-(125.7 against 143.8).
-
-A yet tighter bound saves few steps, and in 2D none of their growth with N
-(the far jumps, 3.7 a particle at 2D 1e5 and 13.7 at 1e7, cross gaps that widen
-with the cluster). Caps of (64, 16), the bound within a few percent of the
-distance (lattice, seed 1): 2D 1e6 38.9 steps a particle against 40.1, 2D 1e7
-43.8 against 45.2 (12.6% more than at 1e6 with either); 3D 1e6 98.1 against
-99.8, 3D 1e7 107.9 against 116.1, but in 280 s, not side by side, where the
-present caps took 197 to 232 beside other runs (a newly held cell rewrites
-31**3 cells of a level, against 11**3). The exact distance to the nearest held
-coarse cell in the pyramid's place (a brute-force measurement, not a kernel)
-at 1e5: 2D 33.5 against 34.6 (the pyramid's bound 0.93 of it on average), 3D
-84.6 against 86.3 (0.84). A larger cap on levels 2 and up alone (12 in 3D, where a
-newly held cell is rare): 3D lattice 1e7, seeds 1 and 2, 109.4 and 110.1 steps against 116.1
-and 112.3 in 0.914 and 1.035 times the time; 3D off-lattice 1e5, seeds 1 to 6, 98.1 steps
-against 96.3 (coarser units a level cell). Again on a host whose last-level cache holds 8 MiB
-at 15 ns a read (3D lattice, seed 1, side by side, the cores swapped): 1e7 109.4 steps against
-116.1 in 0.994 and 1.011 times the time, 1e5 84.4 against 86.3 in 0.998 and 0.980; a cap of 12
-on levels 3 and up alone, 1e7 113.4 steps in 0.951 and 1.043 times, 1e5 unchanged. Not kept."""
+The levels hold Euclidean distances from their cells' centres, not whole cells between
+cells as a Chebyshev pyramid would: the bound far from the cluster is closer to the
+distance, and a walker's way in from the launch circle takes fewer jumps, a difference
+that grows with the cluster."""
 CCAP = (8, 4)
 """Cap of the centre field (coarse cells), 2D and 3D: each particle lowers the
 (2 cap - 1)**dim cells about its own, 30 sites (3D 14) from their centres.
-Near the cluster the Chebyshev field it replaced bounded the distance by whole
-cells: with it, 207 steps a particle at 3D 1e5 and 79 at 2D 1e5, with the
-exact nearest distance in its place (a measurement, not a kernel) 115 and
-47, with this field 124 and 54. Caps measured (``GRID_GROWTH`` 2.0): 2D 1e6
-6, 8, 11: 6.25, 5.97, 6.33 s; 3D 1e5 3, 4, 6: 2.87, 2.72, 3.06 s. Its bytes hold values to 255,
-so it is not packed as the lattice's field is (``lattice.field.FIELD_PACKED``), and its size tells less:
-the field and the pyramid stored in two bytes a cell, 3D off-lattice 1e6 took 1.043 and 1.031
-times the time, 3e6 1.059 and 1.013 (seed 1, side by side, the cores swapped), where the 3D
-lattice took 1.08 and 1.06 at 1e6."""
+Near the cluster it bounds the distance by Euclidean distances from the cells'
+centres, closer than a Chebyshev field's whole cells. The caps balance the
+bound's reach against each particle's updates (the caps tried:
+docs/performance.md). Its bytes hold values to 255, so it is not packed as the
+lattice's field is (``lattice.field.FIELD_PACKED``), and off-lattice its size
+matters less to the walk's time than the lattice field's does."""
 
 
 def field_reach(cap):
@@ -231,10 +208,23 @@ def pyramid_lower(field, dim, W, i, j, k, levels):
     level below (``_level_rows``), up to the first level whose cell held one
     already. Returns that level, -1 when none did.
 
-    Its cost grows little with the cluster (3D lattice, seed 1, clocks about it and about
-    the field's lowering in a timing copy): 0.148 newly held coarse cells a particle at 1e5,
-    1e6 and 3e6; this recording 0.27, 0.31 and 0.32 us a particle, the field's lowering
-    0.28, 0.28 and 0.29, the whole attachment (clocks included) 0.99, 1.06 and 1.10."""
+    A coarse cell is newly held about once every few particles, so this costs
+    a particle about what the field's lowering does, and grows little with the
+    cluster (docs/performance.md).
+
+    Parameters
+    ----------
+    field : uint8 (...)
+        The field with the pyramid's levels above it (``maps.pyramid_starts``' layout).
+    dim : int
+        2 or 3.
+    W : int
+        The grid's side in unit cells.
+    i, j, k : int
+        The unit cell (k 0 in 2D).
+    levels : int
+        Levels of the pyramid, the field's included (``maps.pyramid_levels``).
+    """
     base = 0
     step = _STEP[dim]
     for level in range(levels):
@@ -275,24 +265,32 @@ def centre_bound(field, dim, fw, X0, X1, X2):
     (a capped cell's: the cap's, ``field_reach``) less X's way to its centre.
 
     Each cell's centre gives a bound (the distance is 1-Lipschitz); X's own alone
-    is loose by up to half a cell's diagonal, and near the cluster every jump is
-    shorter for it: 2D 1e6 (4 seeds side by side) 55.0 walk steps a particle
-    against 48.5 with the surrounding centres, 1e7 60.6 against 54.6; 3D 1e7 137.3
-    against 119.4. The same above the field (``pyramid_dist``) took fewer steps
-    (2D 1e6: 46.3; 3D lattice 1e6: 98.1 against 100.0) but no less time (2D 1.05
-    to 1.15 times; 3D 0.96 to 1.11; 3D lattice 1e7, seeds 1 and 2: 112.2 and 109.4
-    against 116.1 and 112.3 steps, 1.018 and 1.095 times), and is not done. The cells
-    are spelled out, with fixed strides within a tile: as a loop over them with
-    ``field_cell`` (the same walks) 2D 1e6 took 1.02 and 1.04 times the time.
+    is loose by up to half a cell's diagonal, and near the cluster every jump
+    would be shorter for it. The pyramid above the field (``pyramid_dist``) reads
+    X's own cell only: the surrounding cells there save steps but no time. The
+    cells are spelled out, with fixed strides within a tile, rather than a loop
+    over them with ``field_cell``. The cell that gives the bound is not
+    tracked for a ball exit (as the pyramid's is): the steps it would save are
+    near ones, cheap, and its tracking would cost every bound step. The figures:
+    docs/performance.md.
 
-    Measured and not kept: the walker's exit from the ball about the centre of
-    the cell that gives the bound (``walk.ball_exit``, as the pyramid's), that
-    cell tracked here. Side by side against the pyramid's exits alone: 2D 1e6
-    40.8 and 39.9 steps a particle against 45.6 and 45.7, 0.85 to 1.42 times the
-    time (6 pairs, median 0.94); 2D 1e7 44.3 against 50.4, 1.053 times; 3D 1e6
-    83.1 and 81.2 against 100.7 and 102.4, 0.948 and 0.988 times; 3D 1e7 92.1
-    against 109.7, 1.054 times (seed 1). The steps saved are near ones, cheap;
-    the cell's tracking costs every bound step.
+    Parameters
+    ----------
+    field : uint8 (...)
+        The centre field (level 0 of the pyramid's array).
+    dim : int
+        2 or 3.
+    fw : int
+        The field's side in coarse cells (at least 2).
+    X0, X1, X2 : float
+        The point in grid coordinates (X2 0 in 2D).
+
+    Returns
+    -------
+    e : int64
+        The stored value of X's coarse cell (0: at the cap).
+    bound : float
+        The lower bound on the distance from X to every particle centre.
     """
     side = float(1 << FS)
     scale, top = 1.0 / CENTRE_UNITS[dim], CENTRE_TOP[dim]
@@ -348,39 +346,24 @@ def pyramid_dist(field, pstart, dim, W, X0, X1, X2):
     That cell's disk, or a neighbour's, holds X off its centre and may be
     larger than the one about X; the walker's exit from it has a closed form
     (``walk.ball_exit``). The off-lattice walk jumps out of X's own cell's
-    ball (``pyramid_ball``): 2D 1e6, seeds 1 and 2, 45.6 and 45.7 steps a
-    particle against 47.8 and 48.6, in 0.85 and 0.84 times the time (side by
-    side, one core each); in ``workflows/cost_exponent.py`` (its rounds against
-    the rows they replaced, run on an earlier day), 2D 1e7 7495 and
-    8257 ns a particle against 9043 and 9466 (50.4 and 50.9 steps against
-    54.6 and 53.1), 1e5 5414 and 5814 against 6276 and 6340; 3D 1e7 28863 and
-    29352 against 33407 and 34867 (109.7 and 111.9 steps against 120.6 and
-    119.7), 1e5 15640 and 15868 against 17856 and 19234. The lattice walk
-    does not: its circle jumps where the pyramid's bound reached farthest,
-    made such exits (seed 1, side by side), took 43.2 steps a particle against
-    45.2 at 2D 1e7 in 1.072 times the time, 107.2 against 116.1 at 3D 1e7 in
-    1.108 times; again with the field packed (``lattice.field.FIELD_PACKED``; side by side, the
-    cores swapped), 3D 1e5 85.1 against 86.3 in 1.064 and 1.039 times, 1e6 94.8 against
-    99.8 in 1.025 and 1.035, 1e7 107.2 in 0.999 and 1.070: an exit costs more than the
-    jumps it saves. Measured and not done (2D
-    lattice, side by side): the largest such disk of the 5x5 cells about X's
-    took 31.7 steps a particle at 1e5 against 34.6, and 1.05 to 1.28 times the
-    time at 1e6 (6 seeds); the disk of the cell two cells up the pyramid's
-    gradient, 32.1, 35.7 and 39.9 steps at 1e5, 1e6 and 1e7 against 34.6, 40.1
-    and 45.3, a slower growth with N, and 1.01 times the time at 1e6 (geometric
-    mean of 16 seeds), 1.10 at 1e7 (2 seeds); the disk of the cell three cells
-    out along the walker's radius, read in the same pass as this bound, 31.9
-    and 36.6 steps at 1e5 and 1e6 against 34.6 and 39.9, and 1.05 times the
-    time at 1e6 (16 seeds). The cells read cost more than the jumps saved.
-    Nor do the levels below the answer cost: the search started at the level
-    the walker's previous far jump used (the same clusters) took 0.82 to 1.27
-    times the time at 3D lattice 1e6 (10 seeds, median 1.02), 1.002 and 0.952
-    at 1e7 (2 seeds). Nor in the off-lattice walk, its far walkers past the field
-    (``offlattice.grid.FAR_CLEAR``): the search from the level of the walker's last
-    ball exit, down only while the level below might not be at its cap (a level whose
-    value puts the one below at least its cap away, less the way between their
-    centres, ends it unread), took 1.027 and 1.096 times the time at 2D 1e7, 0.968
-    and 1.027 at 3D 3e6 (seeds 1 and 2, the same clusters, side by side)."""
+    ball (``pyramid_ball``); the lattice walk does not, as there an exit costs
+    more than the jumps it saves. Larger disks of nearby cells, and a search
+    that starts at the level the walker's last far jump used, cost more than
+    they save too (docs/performance.md).
+
+    Parameters
+    ----------
+    field : uint8 (...)
+        The field with the pyramid's levels above it.
+    pstart : int64 (L + 1,)
+        Where each level starts in ``field`` (``maps.pyramid_starts``).
+    dim : int
+        2 or 3.
+    W : int
+        The grid's side in unit cells.
+    X0, X1, X2 : float
+        The point in grid coordinates (X2 0 in 2D).
+    """
     centre, _, gap = pyramid_ball(field, pstart, dim, W, X0, X1, X2)
     return centre - gap
 
@@ -395,15 +378,23 @@ def pyramid_ball(field, pstart, dim, W, X0, X1, X2):
     A ball about that centre holds no particle: the off-lattice walk jumps out of it
     (``walk.ball_exit``) where it is larger than the ball about X.
 
-    Most of its time at 3D lattice 3e6 waits on the level's read (80% of its
-    samples, perf). Measured and not done: level 2 read first, and level 1's read
-    skipped where level 2's value puts level 1 at its cap beneath X (each held cell
-    below lies in a held cell above; the same clusters): 3D lattice 3e6 (seed 1,
-    side by side, the cores swapped) 70.1 and 69.0 s against 66.8 and 67.1. Nor levels 1
-    and 2 read together, both loads issued before either is tested so that their misses
-    overlap (the same clusters, side by side, the cores swapped): 3D lattice 3e6 0.937 and
-    0.989 times the time (seed 1), 1.025 and 1.072 (seed 2); 3D off-lattice 3e6 0.958 and
-    1.048; 2D lattice 1e7 1.043 and 1.069."""
+    Most of its time waits on the level's read; reading level 2 first, or
+    levels 1 and 2 together so that their misses overlap, does not shorten
+    that wait (docs/performance.md).
+
+    Parameters
+    ----------
+    field : uint8 (...)
+        The field with the pyramid's levels above it.
+    pstart : int64 (L + 1,)
+        Where each level starts in ``field`` (``maps.pyramid_starts``).
+    dim : int
+        2 or 3.
+    W : int or float
+        The grid's side in unit cells.
+    X0, X1, X2 : float
+        The point in grid coordinates (X2 0 in 2D).
+    """
     step = _STEP[dim]
     for level in range(1, len(pstart) - 1):
         shift = FS + step * level

@@ -16,6 +16,8 @@ maps; the centre pyramid (``centres``) stacks coarser fields above it in the
 same array (``pyramid_starts``), so that a walker far from the cluster reads
 a bound from a small array (beside periodic sides the off-lattice walk
 searches the maps instead).
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import mmap
@@ -79,8 +81,8 @@ def filled(n, value, dtype):
     """``np.full(n, value, dtype)``, in transparent huge pages where the OS allows.
 
     numpy advises huge pages for its large arrays, numba's allocator does
-    not: grids of hundreds of MB read at random then cost a TLB miss per read
-    on 4 KiB pages. The advice must come before the first write.
+    not: a large array read at random then costs a TLB miss per read on
+    small pages. The advice must come before the first write.
     """
     a = np.empty(n, dtype)
     if a.nbytes >= 2 * HUGE_PAGE:
@@ -94,20 +96,17 @@ TILE_BITS = (0, 0, 4, 3)
 (2D 16x16 words, 128x128 sites, 2 KiB; 3D 8x8x8 words, 32**3 sites, 4 KiB),
 so that the words near a site share a few memory pages and a cluster
 touches the pages along it, not every row of the grid. Within a tile the
-words lie row after row, a cache line 32x4x4 sites in 3D. Measured and not
-kept: 3D words in Morton order within the tile, a line 2x2x2 words (8**3
-sites), in which 18% fewer lines hold a particle at 3D lattice 1e6 (36.5
-thousand against 44.3): 3D lattice, seed 1, side by side with the cores
-swapped (the same clusters), 1e6 1.082 and 1.007 times the time, 1e7 1.033
-and 1.047."""
+words lie row after row, a cache line 32x4x4 sites in 3D (Morton order
+within the tile, which puts fewer lines along the cluster, is slower:
+docs/performance.md)."""
 
 
 UNRESERVED = sys.platform.startswith("linux")
 """Whether ``zeroed`` may take large arrays from ``_unreserved`` (Linux's ``MAP_NORESERVE``)."""
 RESERVE_MIN = 1 << 28
-"""Bytes from which ``zeroed`` maps its array with ``_unreserved`` (256 MiB: the 1.1 GiB of words of a 3D
-lattice grid of side 2048, which a cluster needs from some 4e6 particles on, are; a small cluster's grids,
-which a sweep builds by the thousand, are not)."""
+"""Bytes from which ``zeroed`` maps its array with ``_unreserved`` (256 MiB: a 3D
+lattice grid of side 2**11 and up is mapped so; a small cluster's grids, which a sweep builds by the
+thousand, are not)."""
 _MAP_NORESERVE = 0x4000  # Linux's flag; Python's mmap module does not name it
 
 
@@ -116,10 +115,9 @@ def _unreserved(nbytes):
     may promise (``MAP_NORESERVE``): only the pages written take memory.
 
     A grid spans the cluster's bounding cube, and a plain allocation of it is refused once it exceeds the
-    machine's memory, though its written pages are a small part: a 3D lattice grid of side 8192 (a cluster
-    whose farthest site lies 2044 sites out: the 3D lattice cluster of 1e8, seed 1, from 9.5e7 particles
-    on) holds 72 GiB of words, refused on this 24 GiB machine (``MemoryError`` from numba's allocator).
-    Where overcommit is strict (``vm.overcommit_memory`` 2) Linux counts such a mapping all the same.
+    machine's memory (``MemoryError`` from numba's allocator), though its written pages are a small part:
+    a large 3D lattice cluster's grid holds more words than a machine has memory (the case that
+    showed it: docs/performance.md). Where overcommit is strict (``vm.overcommit_memory`` 2) Linux counts such a mapping all the same.
     Called from the kernels in object mode; the array keeps the mapping, unmapped when numba drops its
     last reference.
     """
@@ -134,15 +132,11 @@ def zeroed(n, dtype):
     numba's ``np.zeros`` writes every byte. Here the whole pages go back to
     the OS (``madvise(MADV_DONTNEED)``), which maps them to zeros on demand:
     a grid over the cluster's bounding square costs the pages the cluster
-    and its walkers write, not the square. These pages stay small: with
-    transparent huge pages for every allocation (``always``), side by side
-    with a process that had them turned off, 2D lattice growth of 1e7 took
-    1.06 and 1.26 times the time, 3D lattice of 1e6 1.03 and 1.07, of 1e7
-    1.055 and 1.088 (seeds 1 and 2), where the grids outgrow the caches most;
-    again on a host whose last-level cache holds 8 MiB at 14 ns a read, 3D
-    lattice 1e7 (seed 1, the cores swapped) 1.062 and 1.037 times, the peak 869
-    MB against 452. Small pages also map every unwritten page to one zero page,
-    so the walk's reads of empty space stay in the caches.
+    and its walkers write, not the square. These pages stay small: huge
+    pages would back whole stretches of empty space with memory, and make
+    the large growths slower where the grids outgrow the caches
+    (docs/performance.md). Small pages also map every unwritten page to one
+    zero page, so the walk's reads of empty space stay in the caches.
 
     From ``RESERVE_MIN`` bytes on Linux the array is a mapping the OS does not
     reserve memory for (``_unreserved``), already zero.
@@ -319,12 +313,8 @@ FIELD_TILE = (0, 0, 6, 4)
 """By dimension: a field's cells are stored in tiles of ``2**FIELD_TILE`` cells
 a side, 4 KiB each (a memory page), so that the cells within a cap of the
 cluster share pages and the rest are never written. Within a tile the cells
-lie row after row; in cache-line bricks instead (4x4x4 cells, 2D 8x8), a
-measured copy of the 3D lattice walk took the same time a step at 1e7, 42887
-processor cycles a particle against 42802 (one round, side by side). Tiles of 4x4x4 cells
-(``FIELD_TILE`` 2 in 3D: a tile a cache line), where the off-lattice walk reads the 8 cells about the
-walker (``centres.centre_bound``): the same clusters in 1.004 and 1.061 times the time at 3D 1e5,
-1.038 and 1.044 at 1e6 (seed 1, side by side, the cores swapped)."""
+lie row after row (cache-line bricks within the tile, or tiles of a cache
+line, are no faster: docs/performance.md)."""
 
 
 @jit
@@ -355,10 +345,8 @@ def field_tile(dim, fw, ci, cj, ck):
 PYRAMID_STEP = (0, 0, 2, 1)
 """By dimension: each level of the pyramid above a field has cells ``2**PYRAMID_STEP``
 times wider than the level below; level 0 is the field (cells of
-``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps. 2D's of 1
-(the bound read where the distance is 8 to 16 cells, not 4 to 16): 2D lattice
-1e6 (seeds 1 to 4) 39.1, 40.9, 41.4 and 40.0 steps a particle against 40.1,
-39.9, 40.3 and 40.1, in 1.01 to 1.12 times the time side by side."""
+``2**FIELD_SHIFT``). 3D's field has a smaller cap, hence finer steps; a 2D step
+of 1 saves no steps and takes more levels (docs/performance.md)."""
 
 
 @jit
@@ -388,11 +376,8 @@ def pyramid_allocate(dim, width, cap, most=64):
     """The field with coarser fields above it, one array, every cell at the cap.
 
     Level l has cells of side ``2**(FIELD_SHIFT + PYRAMID_STEP[dim] * l)`` and
-    starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first.
-
-    Measured and not kept: this array alone in transparent huge pages (``madvise`` after
-    ``zeroed``; the words in small pages), so that the walk's reads of the field and the pyramid
-    miss no TLB entry: 3D lattice 1e7 (seed 1, side by side, the cores swapped, the same clusters)
-    1.007 and 1.017 times the time, with 64 MB more in huge pages; 3e6 1.044 and 0.959.
+    starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first. It
+    is in small pages, as every ``zeroed`` array is (huge pages for this
+    array alone gain nothing: docs/performance.md).
     """
     return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)

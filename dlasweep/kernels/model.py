@@ -25,18 +25,14 @@ LINE = SEED_SHAPES.index("line")
 GRID_GROWTH = {"lattice": 2.0, "offlattice": 2.0}
 """How much larger each kernel builds its grids when the cluster outgrows them: the lattice's side, the
 off-lattice grids' half-width over the cluster. Pages cost memory only once written (``maps.zeroed``), so a
-larger grid costs little; a rebuild marks every particle again (off-lattice, since 2026-11-27, all but in the
-centre field, which it copies; the lattice, since 2026-11-29, only near the old grid's edge: it carries its
-words, field and the pyramid's first level over, ``lattice.words.regrow``). Off-lattice 1.3, 1.6 and 2.0 grew
-2D 1e6 in the same time until each particle lowered the centre field's (2 cap - 1)**dim cells, at every
-rebuild too; since then 2.0 against 1.3: 2D 1e6 5.97 s against 6.45, 3D 1e5 2.72 against 2.76, for 0.3 bytes a
-particle more at 2D 3e6. The lattice's 1.25 became 2.0 when its rebuilds marked the centre pyramid cell by
-cell (no fill): 2D 1e6 3.20 s against 3.58 (the kernel before the pyramid: 3.32), 2D 1e7 42.15 s and 22.1
-bytes a particle against 44.59 and 22.7 before. The walks read the grids, so either value is part of its
-model's clusters (the fingerprints)."""
+larger grid costs little, while each rebuild costs work: off-lattice it marks every particle again but in the
+centre field, which it copies (``offlattice.grid.regrow_grid``); the lattice carries its words, field and the
+pyramid's first level over and marks only near the old grid's edge (``lattice.words.regrow``). A factor of 2
+means fewer rebuilds for little memory (the factors tried: docs/performance.md). The walks read the grids, so
+either value is part of its model's clusters (the fingerprints)."""
 
 STEPS_DTYPE = np.uint32
-"""A particle's diffusion time: 4 bytes, not 8, at 10^8 particles 400 MB less. A
+"""A particle's diffusion time: 4 bytes, not 8, half the memory of 8-byte counts. A
 particle takes tens of moves on average; one that would take 2^32 - 1 or more
 is recorded as 2^32 - 1 (``diffusion_time``, saturated)."""
 MOST_STEPS = np.iinfo(STEPS_DTYPE).max
@@ -63,7 +59,7 @@ exactly, or is killed beyond ``kill_factor`` times its radius, or neither
 
 
 def model_from(p) -> Model:
-    """The kernels' ``Model`` from a dict that ``dlasweep.params.resolve`` returned."""
+    """The kernels' ``Model`` from ``p``, a dict that ``dlasweep.params.resolve`` returned."""
     launch_box = p["launch"] == "box"
     boxed = p["size"] > 0 and p["seed_shape"] != "line"
     return Model(
@@ -85,9 +81,8 @@ def lockstep_flag(walkers):
     The kernels branch on ``lockstep is not None``, which numba decides while
     it types them (its dead-branch pruning resolves a comparison with None): a
     growth of one walker is compiled without the lockstep walk, and of more
-    without the single walker's. Cold (``grow(300)``, a fresh cache), the 2D
-    kernels compiled in 73 s (lattice) and 143 s (off-lattice) with both, of
-    which the lockstep walk 19 and 52; without it, in 62 and 110 s.
+    without the single walker's, which shortens a cold compile (the compile
+    times: docs/performance.md).
     """
     return None if walkers == 1 else True
 
@@ -102,10 +97,12 @@ def sticks(stickiness, rng):
 @inline
 def sticks_xo(stickiness, s0, s1, s2, s3):
     """``sticks`` with the draw from the xoshiro256+ stream held in registers
-    (``walk.xo``): whether it sticks, and the stream's new state.
+    (``s0`` .. ``s3``, ``walk.xo``): whether it sticks with probability
+    ``stickiness``, and the stream's new state.
 
     Inlined into the lattice walk's hot loop; written with one return, as
-    with two numba's inlining made that loop 20% slower.
+    numba's inlining of a function with two makes that loop slower
+    (docs/performance.md).
     """
     stuck = True
     if stickiness < 1.0:
@@ -116,8 +113,9 @@ def sticks_xo(stickiness, s0, s1, s2, s3):
 
 @jit
 def checkpoint(marks, times, passed, count, t0):
-    """Record the clock for every mark that ``count`` particles reach; returns
-    how many marks have passed (the caller passes it back in)."""
+    """Record the clock, in seconds since ``t0`` (``_jit.clock``), into ``times`` for every
+    mark of ``marks`` that ``count`` particles reach; returns how many marks have passed
+    (``passed``: the caller passes it back in)."""
     while passed < len(marks) and marks[passed] <= count:
         times[passed] = clock() - t0
         passed += 1
@@ -126,7 +124,7 @@ def checkpoint(marks, times, passed, count, t0):
 
 def grown(points, steps, parents, count, status, times, seconds):
     """A kernel's result as ``dlasweep.grow`` takes it: the first ``count``
-    points, diffusion times and parents (copied when growth stopped short, so
+    points, diffusion times (``steps``) and parents (copied when growth stopped short, so
     that the unused tail is freed), the status code, the times and the seconds
     the growth took in all."""
     if count < len(points):

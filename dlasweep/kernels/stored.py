@@ -20,8 +20,9 @@ def kept_on_disk(func):
     edit of the module or a new numpy computes the tables again, so a kept
     table is always the one ``func`` would return here. Where the folder
     cannot be written (a read-only install) they are computed in each
-    process, as without this. The lattice's exit tables took 0.5 to 0.7 s
-    in every process, longer than a sweep's small clusters take to grow.
+    process, as without this. Computed in every process, the lattice's exit
+    tables would take longer than a sweep's small clusters take to grow
+    (docs/performance.md).
     """
     module = Path(inspect.getsourcefile(func))
 

@@ -5,6 +5,11 @@ from outside the launch circle/sphere or above the launch line/plane; and the
 kernels' hot-loop random stream, a xoshiro256+ generator seeded from the
 numpy Generator (numpy's Generator costs several times more per draw from
 numba).
+
+Throughout, ``dim`` is the dimension (2 or 3); ``s0``, ``s1``, ``s2``, ``s3``
+(uint64) are a xoshiro256+ state held in registers, passed in and returned
+(``xo``); ``rs`` (uint64 (4,)) is the same state in an array
+(``seed_stream``); ``rng`` is the numpy Generator.
 """
 
 import numpy as np
@@ -14,7 +19,7 @@ from .._jit import borrow, inline, jit
 
 @jit
 def seed_stream(rng):
-    """A xoshiro256+ state drawn from the Generator (splitmix64 expanded)."""
+    """A xoshiro256+ state (uint64 (4,)) drawn from the Generator ``rng`` (splitmix64 expanded)."""
     rs = np.zeros(4, np.uint64)
     z = np.uint64(rng.integers(1, 2**62))
     for k in range(4):
@@ -105,7 +110,7 @@ def direction(rng, dim, out):
 @inline
 def _moebius(u0, u1, rho):
     """The point of the unit circle where Brownian motion from ``rho`` (on the real axis,
-    ``|rho| < 1``) leaves the unit disk, from the uniform point ``u``: the Moebius map
+    ``|rho| < 1``) leaves the unit disk, from the uniform point ``u`` = (u0, u1): the Moebius map
     z -> (z + rho) / (1 + rho z) takes the uniform law on the circle to the Poisson kernel
     seen from rho; no trigonometry."""
     zr, zi = u0 + rho, u1
@@ -116,7 +121,7 @@ def _moebius(u0, u1, rho):
 
 @inline
 def _poisson_cos(radius, inner, x):
-    """The cosine of the angle, seen from the centre and measured from the point's own
+    """The cosine of the angle, seen from the centre and counted from the point's own
     direction, at which Brownian motion from a point ``inner`` from the centre of a sphere of
     ``radius`` leaves the ball (3D, ``inner < radius``): its inverse distance to the exit point
     is uniform (``x`` a uniform draw)."""
@@ -128,7 +133,7 @@ def _poisson_cos(radius, inner, x):
 
 @inline
 def _about_axis(a0, a1, a2, cos_t, c, s):
-    """The unit vector at angle acos(cos_t) from the unit axis a, turned about it by the
+    """The unit vector at angle acos(cos_t) from the unit axis a = (a0, a1, a2), turned about it by the
     angle whose cosine and sine are ``c`` and ``s``."""
     if abs(a0) < 0.9:
         e0, e1, e2 = 0.0, a2, -a1
@@ -144,7 +149,8 @@ def _about_axis(a0, a1, a2, cos_t, c, s):
 
 @borrow
 def return_to_sphere(rng, dim, pos, radius, scratch):
-    """Move a walker at ``|pos| > radius`` to where it first hits the sphere.
+    """Move a walker at ``|pos| > radius`` to where it first hits the sphere (``scratch``:
+    float64 (3,) of working space; ``pos`` float64 (3,), moved).
 
     2D: the exterior Poisson kernel is a wrapped Cauchy law in the angle with
     concentration ``radius / |pos|``; the walker always returns.
@@ -174,7 +180,8 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
 
 @borrow
 def ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, radius):
-    """Move the walker at w, inside the ball of ``radius`` about c, to where Brownian motion
+    """Move the walker at w (float64 (3,)), inside the ball of ``radius`` about c = (c0, c1, c2), to
+    where Brownian motion
     from it first leaves the ball (the interior Poisson kernel, as ``return_to_sphere`` draws
     it), from the stream state in registers (see ``xdir``), which it returns.
 
@@ -205,7 +212,7 @@ def ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, radius):
 
 @borrow
 def return_to_plane(rng, dim, pos, height, width):
-    """Move a walker above ``height`` (last axis up) to where it first hits it.
+    """Move a walker at ``pos`` (float64 (3,)) above ``height`` (last axis up) to where it first hits it.
 
     The half-space Poisson kernel: a Cauchy offset (2D) or its radial
     analogue (3D) with scale ``pos_up - height``; the periodic sides of width

@@ -25,7 +25,9 @@ FACE_MODES = 41  # odd Fourier modes up to this in face_law: the next weighs bel
 
 @cache
 def unit_moves(dim, moore):
-    """Unit moves (and contacts): nearest neighbours or the Moore set (built once: a 1e3 cluster grows in 2 ms)."""
+    """Unit moves (and contacts) in ``dim`` dimensions: nearest neighbours, or with ``moore``
+    the Moore set, as int64 (M, 3) rows; built once a process
+    (``functools.cache``): a small cluster grows in milliseconds (docs/performance.md)."""
     grid = np.stack(np.meshgrid(*([np.arange(-1, 2)] * dim), indexing="ij"), -1).reshape(-1, dim)
     norm = np.abs(grid).sum(1)
     keep = norm > 0 if moore else norm == 1
@@ -176,7 +178,7 @@ def exit_tables(dim, moore):
 
 
 # module constants, so that the walk's loop reads them without counting references (numba freezes
-# them); built by alias_table's Python function, as compiling it made an import 1.2 s slower
+# them); built by alias_table's Python function, as compiling it would slow every import (docs/performance.md)
 FACE_CUT_2D, FACE_ALIAS_2D = alias_table.py_func(face_law(2))
 FACE_CUT_3D, FACE_ALIAS_3D = alias_table.py_func(face_law(3))
 

@@ -4,6 +4,8 @@ side, the cap less its distance in cells to the nearest cell that holds a partic
 Marked particle by particle (``field_lower``) or filled from the held cells at a rebuild
 (``field_fill``); stored in the tiles of ``maps.field_cell``, in whole bytes or two cells a byte
 (``FIELD_PACKED``). The centre pyramid (``centres``) stacks its levels above it in one array.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -12,22 +14,18 @@ from ..._jit import borrow, inline, jit
 from .. import maps
 
 FIELD_CAP = (0, 0, 16, 6)
-"""By dimension: reach of the coarse distance field, in cells of 4 sites. A 3D cap of 8 (walkers
-to 28 sites out take cube exits, not far jumps) did not shorten the walk: seeds 1 and 2, 92.7 and
-85.3 steps a particle at 1e5 against 86.3 and 81.0, 106.7 and 99.2 at 1e6 against 99.8 and 100.2."""
+"""By dimension: reach of the coarse distance field, in cells of 4 sites. 3D's cap is 6: a cap of 8
+(walkers to 28 sites out taking cube exits, not far jumps) does not shorten the walk
+(docs/performance.md), and keeps the field from being packed (``FIELD_PACKED``)."""
 FIELD_PACKED = tuple(0 < cap < 8 for cap in FIELD_CAP)
 """By dimension: whether the lattice's Chebyshev field (``field_lower``) holds two cells a byte,
 the even cell in the low four bits: wherever the cap is below 8 (``PAIR_ROWS``' SWAR maximum holds
 values below 8), 3D's cap of 6, not 2D's of 16. The packed cells
 take the first half of the level's bytes, and the second half is never written (no memory):
 the pyramid's levels above stay where ``maps.pyramid_starts`` puts them. The field is what a 3D
-walk's steps near the cluster read first, and its size is what they feel: stored in two bytes a
-cell, 3D lattice 1e7 took 1.157 and 1.204 times the time, 1e6 1.082 and 1.055 (seed 1, side by
-side, the cores swapped; the same clusters). Packed, against a byte a cell (the same way): 1e7
-0.926 and 0.948 times, 1e6 1.008 and 0.982; 1e5 0.466 s against 0.468 (medians of 9, seeds 1
-to 3, one core, one after the other), where raising the packed rows cell by cell, not from
-``PAIR_ROWS``, had taken 1.05 times. The written cache lines of the field about a cluster of
-1e6: 0.58 MiB against 1.10."""
+walk's steps near the cluster read first, and its size is what they feel: packed, it spans about
+half the cache lines, and the large 3D growths are faster for it; ``PAIR_ROWS`` raises two cells
+a byte at once, so that the packing costs the small ones nothing (docs/performance.md)."""
 
 
 def _pair_rows():
@@ -83,11 +81,26 @@ def field_lower(field, dim, fw, cap, reach, ci, cj, ck):
     A field stores ``cap - distance``: zero is the cap, so a page that no
     particle came within reach of is never written and takes no memory.
     Each row is taken a tile's stretch at a time, whose cells lie side by
-    side, by a branch-free maximum the compiler vectorises: rings about the
-    cell that stop where nothing drops marked a 2D off-lattice cluster of
-    1e6 in 0.78 s, these rows in 0.57. The indices are unsigned: numba wraps
-    a negative signed index around, and that branch kept LLVM from
-    vectorising the rows (a row of 31 cells: 51 ns scalar, 11 vectorised).
+    side, by a branch-free maximum the compiler vectorises, which is faster
+    than rings about the cell that stop where nothing drops. The indices are
+    unsigned: numba wraps a negative signed index around, and that branch
+    keeps LLVM from vectorising the rows (docs/performance.md).
+
+    Parameters
+    ----------
+    field : uint8 (...)
+        The field (level 0 of the pyramid's array), stored as ``field_place`` reads it.
+    dim : int
+        2 or 3.
+    fw : int
+        The field's side in cells.
+    cap : int
+        The field's cap, ``FIELD_CAP[dim]``.
+    reach : int
+        Cells to lower about the particle's, at most ``cap``: below it, a
+        rebuild's own cells (``field_fill`` completes them), a cell at a time.
+    ci, cj, ck : int
+        The particle's cell (ck 0 in 2D).
     """
     reach -= 1
     last = (1 << maps.FIELD_TILE[dim]) - 1
@@ -135,8 +148,8 @@ def field_fill(field, dim, fw, cap, held):
     ``held`` flags each tile (``maps.field_tile``) that holds a zero-distance
     cell. A distance reaches at most ``cap`` cells, less than a
     tile, so the passes visit only the tiles beside a held one, in the same
-    order: a rebuild's grid is mostly empty (3D: 8.8% of a growth of 1e6 went
-    to filling it whole).
+    order: a rebuild's grid is mostly empty, and filling it whole would cost
+    a visible share of a growth (docs/performance.md).
     """
     t = maps.FIELD_TILE[dim]
     n = maps.field_tiles(dim, fw)

@@ -19,55 +19,13 @@ about it (``exits.square_exit``), or the circle (sphere) where that reaches
 farther (outside the cluster's circle); outside the launch circle it returns
 exactly (Poisson kernel) instead of wandering off.
 
-Where a large cluster's time goes (seed 1, clocks about the parts of ``_grow``, the 2D and 3D
-growths side by side), 1e5 to 1e7: a walk step 65.0 to 83.3 ns in 2D and 91.4 to 143.2 in 3D; a
-particle's attachment 0.57 to 0.74 us (3D 1.30 to 1.61), its share of grid rebuilds 0.26 to 0.38
-us (3D 0.47 to 0.48; before ``words.regrow`` carried the grid over). In 3D alone on a later host
-(seed 1, the other core idle, clocks about ``attach`` and the rebuilds only) at 1e5, 1e6 and 1e7:
-the attachment 0.86, 0.92 and 1.17 us a particle, the rebuilds 0.32, 0.13 and 0.06 us, the walk 5.89,
-6.84 and 10.26 us, 68.3, 68.6 and 88.4 ns a step: a step's cost holds to 1e6 and is 1.29 times as
-large at 1e7, the steps 1.35 times as many. The steps a particle add
-Brownian jumps alone: 3.7 to 13.7 in 2D (single steps 7.0 and 7.0, square jumps 21.2 and 21.9),
-4.8, 16.3 and 32.3 in 3D at 1e5, 1e6 and 1e7 (single steps 25.8, 25.8, 25.8; square jumps 49.5,
-51.7, 52.1): a walker crosses more of the open 3D cluster before it sticks.
-
-The walk's passes clocked by kind (processor cycles about each pass, about 30 of them the clock's;
-seed 1, the same clusters): in 2D a particle's walk grows from 7.2k cycles at 1e5 to 12.5k at 1e7.
-Of the 5.3k, 2.8k are Brownian jumps that follow a Brownian jump: there are more of them (3.2 to
-12.8 a particle), and each costs more (205 to 270 cycles). Another 1.9k is the square jumps' cost
-(204 to 285 cycles each, 18.7 to 19.9 a particle). Single steps stay at 1.4k. In 3D, with the
-field packed (the time-stamp counter about each pass, one growth alone), it grows from 10.0k
-at 1e5 to 12.2k at 1e6 and 16.7k at 1e7: Brownian jumps that begin far (released, returned or past
-a Brownian jump) take 0.5k, 1.9k and 4.3k (4.0, 14.1 and 29.6 a particle at 135 to 144 cycles each:
-their number grows), square jumps 6.2k, 6.8k and 8.6k (49.5, 51.7 and 52.1 a particle at 126, 131
-and 165 cycles each: their reads grow), single steps 2.3k to 2.5k, returns 0.8k. At 3e7 (beside
-other growths on the other core) 26.4k: 34.7 such Brownian jumps at 233 cycles, square jumps at 250,
-single steps at 137; the jumps' number grows more slowly from 1e7 on, their reads faster.
-Where those far jumps happen (3D, seed 1, counted by the walker's radius over r_max; every one a
-sphere bounded by the pyramid, none by the cluster's circle or a cube): 4.8 a particle at 1e5, 3.5
-of them beyond r_max and 1.3 inside; 16.3 at 1e6, 6.5 and 9.8; 32.3 at 1e7, 7.1 and 25.2, 18.0 of
-those between 0.6 and 0.9 r_max. Walkers reach deeper into the open 3D cluster as it grows: the
-growth is inside it, not walkers bouncing between the launch sphere and the outermost arms. A read
-that waits on the last costs 17 to 20 ns on this host within 2 MiB and 140 to 180 beyond 4 to 8
-MiB (``dlasweep.host``). The 3D grids about a cluster of 1e6 already span 5 MB of written cache lines:
-the words 3.5, the field and the pyramid 1.5; the 2D ones 2.3 MB at 1e6 and
-23.0 at 1e7 (words 12.8, field and pyramid 10.2); the 3D ones 46 MiB at 1e7 (occupancy words 27.3,
-level-1 words 6.3, field 10.5, pyramid 2.3), beyond a last-level cache of 32 MiB: on a host whose
-cache held 8 MiB at 14 ns a read, a walk step took 55.8 ns at 1e5, 56.1 at 1e6 and 69.1 at 1e7. The
-field packed two cells a byte (``field.FIELD_PACKED``) spans 5.5 MiB at 1e7. Reads that wait on one another are not what
-grows: the field's cell and the level-1 word of the walker's site prefetched (``llvm.prefetch``)
-before the pyramid's read, so that the three overlap, took 0.99 times the time at 3D 1e6 (16 pairs
-side by side, seed 1, the same clusters: 0.84 to 1.21 times pair by pair, standard error 0.02) and
-1.00 at 3e6 (4 pairs); with the 27 words ``fine3`` reads prefetched too, 1.06 at 1e6 (2 pairs). Not
-kept. Nor do two walkers' waits overlap: this loop rewritten with W walkers in flight, one move of
-each in turn (a timing copy outside the package, the walkers blind to each other's particles; with
-W 1 it grew these clusters bit for bit), 3D seed 1, one after the other on one core: 1e5 in 0.441
-to 0.449 s with W 2 against 0.449 to 0.462 with W 1 (0.97 times the time a step), 3e6 in 16.4 to
-19.3 s against 17.6 to 20.4 (six runs each, medians 0.95 times a step), W 4 1.00 times; the next
-move's field cell, level-1 word and word prefetched at the end of each move, 3e6 in 27.2 and 27.5 s
-(W 2). A speculative second walker (exact only when it rewinds past each particle that another
-walker adds near its way) would lower the 3D cost exponent by about 0.01 at most (0.95 against
-0.97 a step from 1e5 to 3e6), less its own bookkeeping.
+The single walker's loop (``_grow``) spells out its per-step helpers
+(``walker.distance_bound``, ``touches``, ``step_to``): a call that passes
+arrays would count their references at every step, and so would numba's own
+inlining of them; ``tests/test_pins.py`` holds each copy to its twin.
+Where a large cluster's time goes (steps and jumps by kind, the grids' cache
+footprint) and the ways of overlapping the walk's reads that were tried are
+in docs/performance.md.
 """
 
 import numpy as np
@@ -98,19 +56,21 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
     (or the box's surface: ``release``) and walks, by jumps as far as its
     distance to the cluster allows (``distance_bound``, spelled out in the
     loop), until it sticks or leaves; with more than one walker ``lockstep.grow_in_lockstep``
-    takes over instead. The single walker's loop stays in this function:
-    split into its own, the 1e6 growth measured 2% slower, within the noise
-    but not needed.
+    takes over instead. The single walker's loop stays in this function
+    rather than a function of its own: a split gains nothing (see
+    docs/performance.md). The grid is rebuilt larger (``words.regrow``) at the
+    top of the pass after the one whose attachment outgrew it.
 
     Parameters
     ----------
     dimension : int
-        The model's dimension, a literal: each is compiled apart, its
-        branches on ``dim`` folded away: 2D 1e6, six runs side by side on
-        the two cores, 0.87 to 0.93 of the time; 3D 5e4, 0.97 to 1.03.
+        The model's dimension (2 or 3), a literal (``numba.literally``): each
+        dimension is compiled apart, so that LLVM folds the branches on
+        ``dim`` away (``_jit``; docs/performance.md has the gain).
     lockstep : None or True
         ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
     n : int
+        Most particles to grow, the seed's included.
     model : Model
         The model (``kernels.model.Model``).
     moves : int64 (M, 3)
@@ -118,17 +78,30 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
     marks : int64 (K,)
         Particle counts at which to read the clock, ascending.
     rng : numpy.random.Generator
-    points : int32 (n, dim), steps : uint32 (n,)
-        Filled with the sites and diffusion times of the particles grown.
+        Seeds the walk's xoshiro256+ stream (``walk.seed_stream``) and draws
+        the releases and exact returns.
+    points : int32 (n, dim)
+        Filled with the sites of the particles grown, in attachment order.
+    steps : uint32 (n,)
+        Filled with their diffusion times (``model.diffusion_time``).
     times : float64 (K,)
         Filled with the seconds at each mark as it passes.
-    t_start, t_cut, t_alias, t_off
-        The exit tables (``exits.exit_tables``).
+    t_start : int64 (R + 2,)
+        Where the exit table of each square half-width starts in the others
+        (``exits.exit_tables``).
+    t_cut : float64 (C,)
+        The alias tables' cut probabilities.
+    t_alias : int32 (C,)
+        The alias tables' aliases, local to their half-width.
+    t_off : int8 (C, 3)
+        Each symmetry class's representative exit site.
 
     Returns
     -------
     count : int
-    status : int, a code of ``dlasweep.params.STATUSES``
+        Particles grown.
+    status : int
+        A code of ``dlasweep.params.STATUSES``.
     """
     literally(dimension)
     t0 = clock()
@@ -187,8 +160,7 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
         if regrid:
             # Built here, at the top of a pass, from the old grid, whose pages ``regrow``
             # hands back as it carries them over: the two grids are never held whole
-            # at once (when they were, the memory added at 1e6 in 3D was 122 MB, not
-            # 88; at 1e7 in 2D 389 MB, not 340).
+            # at once, which would raise the peak memory (docs/performance.md).
             words, start, blocks, cells, field = regrow(points, count, dim, width, off, period, grid)
             grid = (words, start, blocks, cells, field, width, off)
             nb0, base1, nb1 = blocks[0], start[1], blocks[1]
@@ -250,8 +222,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                     pos[a] = q[a]
                 break
             i, j, k = q[0] + off, q[1] + off, q[2] + off
-            # >>> distance_bound, spelled out: called, it made the 1e6 growth 44% slower
-            # and 35% inlined (reference counting of its arrays at every step)
+            # >>> distance_bound, spelled out: a call, or numba's inlining of it, would add
+            # reference counting of its arrays at every step (docs/performance.md)
             d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
             far = 0.0
             if 0 <= i < width and 0 <= j < width and 0 <= k < width:
@@ -405,7 +377,32 @@ def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps,
                t_start, t_cut, t_alias, t_off):
     """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays.
 
-    ``dimension`` (the model's) is a literal: each is compiled apart, and only when used."""
+    One compiled call grows a whole batch, so that a sweep's small clusters
+    do not pay a call from Python each.
+
+    Parameters
+    ----------
+    dimension : int
+        The model's dimension, a literal: each is compiled apart, and only when used.
+    lockstep, n, model, moves, marks
+        As ``_grow`` takes them.
+    rngs : list of numpy.random.Generator
+        One generator a cluster (a reflected list: ``_jit``).
+    points : int32 (B, n, dim)
+        Row i receives cluster i's sites.
+    steps : uint32 (B, n)
+        Row i receives cluster i's diffusion times.
+    times : float64 (B, K)
+        Row i receives cluster i's seconds at each mark.
+    counts : int64 (B,)
+        Receive the particles grown.
+    statuses : int64 (B,)
+        Receive the status codes.
+    seconds : float64 (B,)
+        Receive each growth's seconds in all.
+    t_start, t_cut, t_alias, t_off
+        The exit tables, as ``_grow`` takes them.
+    """
     literally(dimension)
     for i in range(len(rngs)):
         start = clock()
@@ -420,11 +417,13 @@ def grow_lattice(n, p, marks, rngs, times=None):
     Parameters
     ----------
     n : int
+        Most particles a cluster, the seed's included.
     p : dict
         Model parameters as ``dlasweep.params.resolve`` returns them.
     marks : int64 (K,)
         Particle counts at which to record the time.
     rngs : list of numpy.random.Generator
+        One generator a cluster: the cluster is a function of it.
     times : float64 (len(rngs), K), optional
         Filled as the marks pass (NaN before), so that another thread can
         watch the growth.

@@ -19,6 +19,37 @@ def grow_in_lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points,
     whose site another walker just filled coalesces with it. Takes over from
     ``_grow`` once the seed is placed (its arguments are ``_grow``'s state)
     and returns (count, status).
+
+    Parameters
+    ----------
+    n : int
+        Most particles to grow.
+    model : Model
+        The model (``kernels.model.Model``).
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts (``exits.unit_moves``).
+    marks : int64 (K,)
+        Particle counts at which to read the clock.
+    rng : numpy.random.Generator
+        Draws the walkers' starting sites.
+    rs : uint64 (4,)
+        The xoshiro256+ stream of the steps and the sticking (``walker.near_walk``).
+    t0 : float
+        The clock at the growth's start (``_jit.clock``).
+    times : float64 (K,)
+        Receives the seconds at each mark.
+    passed : int
+        Marks passed already (``model.checkpoint``).
+    points : int32 (n, dim)
+        The sites, the seed's filled; receives the particles grown.
+    steps : uint32 (n,)
+        Receives the diffusion times.
+    count : int
+        Particles so far (the seed's).
+    r_max, h_max : float
+        The cluster's radius and height so far.
+    grid : tuple
+        ``(words, start, blocks, cells, field, width, off)``, as ``words.rebuild`` builds it.
     """
     dim, size, walkers, max_steps, stickiness = model.dim, model.size, model.walkers, model.max_steps, model.stickiness
     line = model.seed_shape == codes.LINE

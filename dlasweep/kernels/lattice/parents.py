@@ -7,7 +7,9 @@ plane seed: its height is 0) has parent -1, the substrate being there
 first, and so have the seed particles. The sites occupied when particle i
 stuck are those of particles 0..i-1 (a site is never filled twice), so the
 parents follow from the positions alone: this pass over them finds exactly
-what the walk touched, and the walk's hot loop stays as it was.
+what the walk touched, and the walk's hot loop keeps no record of contacts.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -90,21 +92,18 @@ def lattice_parents(points, moves, nseed, period):
     indices in tile order, a site's index at its tile's offset plus the
     occupied bits below its own. That costs 4 bytes a particle and 16 a tile
     held, about 5 bytes a particle in all (a dense int32 per site of each
-    tile cost 20 at 10^7), and neighbours share a tile or two (a hash table
-    took 3x as long in 2D and 5x in 3D at 1e6: a cache miss per neighbour).
+    tile costs several times that), and neighbours share a tile or two (a
+    hash table costs a cache miss per neighbour: docs/performance.md).
 
     The tiles are numbered in the directory's order, and the neighbours are
     looked up site after site in that order, each site read from its tile's
     word: the lookups then read memory close to where they last read, where
-    in attachment order each particle's were a cache miss or more apart. The
+    in attachment order each particle's are a cache miss or more apart. The
     tile numbers are kept in ``parents`` until the last pass overwrites them.
-    On the points of clusters of 1e7 (seed 1, one core, a busy host): 3D 1.6
-    to 1.8 s against 3.6 to 4.1, 2D 0.83 against 1.1; at 1e5 9 ms against 10.
-    A growth's time is its kernel's and this pass's: 3D 1e7 1.55 s beyond the
-    kernel against 4.3. ``_earliest_neighbour`` called, not inlined: 2.0 s at
-    3D 1e7 (``borrow``), 3.1 and 3.4 (``jit``, counting references). The
-    directory's and the words' lines prefetched 16 particles ahead in the
-    passes in attachment order: 3D 1e7 1.5 s, 2D 0.86, 1e5 10 ms; not kept.
+    ``_earliest_neighbour`` is inlined (``_jit.inline``): called, it costs a
+    call per particle, and reference counting of its arrays under ``jit``.
+    The times, and a variant that prefetches in attachment order and does no
+    better: docs/performance.md.
 
     Parameters
     ----------
@@ -181,7 +180,13 @@ def lattice_parents(points, moves, nseed, period):
 
 @inline
 def _earliest_neighbour(i, q0, q1, q2, moves, dim, period, lo, side, directory, words, offsets, index):
-    """The earliest particle before particle i, at site q, among q's neighbours (``moves``); -1 for none."""
+    """The earliest particle before particle i, at site q = (q0, q1, q2), among q's neighbours
+    (``moves``); -1 for none.
+
+    ``period`` wraps a substrate's sides; ``lo`` and ``side`` are the box (``_box``);
+    ``directory``, ``words``, ``offsets`` and ``index`` the site index that ``lattice_parents``
+    builds: each tile's number, its occupied sites' bits, its start in ``index``, and the
+    particles' numbers in tile order."""
     best = -1
     for m in range(moves.shape[0]):
         n0, n1, n2 = q0 + moves[m, 0], q1 + moves[m, 1], q2 + moves[m, 2]

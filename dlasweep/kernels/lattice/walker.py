@@ -18,20 +18,9 @@ from .words import fine2, fine3, in_contact, mark_images, occupied, site_word, w
 FAR_CLEAR = tuple(((FIELD_CAP[d] << maps.FIELD_SHIFT) - 1) * np.sqrt(d) + 1.0 if d > 1 else 0.0 for d in range(4))
 """By dimension: where the centre pyramid bounds a site's distance by this much, no held coarse cell
 lies within the field's cap of the site's (a particle in one would lie within cap coarse cells less
-a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``).
-
-Measured and not kept: the field left unread, and a Brownian jump taken, wherever the pyramid's bound
-alone reaches ``CIRCLE_MIN`` (3D, seed 1, side by side, the cores swapped): 1e5 89.2 steps a particle
-against 86.3 in 1.044 and 1.097 times the time, 1e6 102.9 against 99.8 in 0.980 and 0.991; only where
-it reaches beyond the field's largest bound (21 sites), 1e5 86.8 steps in 1.023 and 1.006 times, 1e6
-100.2 in 0.999 and 1.003. Again at 1e7, the field unread wherever the pyramid's bound gives a jump
-beyond the largest cube the field allows (22.9 sites: its largest bound, 21, less one, plus the
-rounding and ``JUMP_MARGIN``), the pyramid's bound kept as a Chebyshev one there (3D lattice, seed
-1, side by side, the cores swapped; other clusters): 1.019 and 0.997 times the time, 116.5 steps a
-particle against 116.1; with a threshold of 23 sites and the field's largest bound in its place,
-0.978 and 0.974 times, 115.3 steps; at 1e5, seeds 1 to 8, 86.0 steps a particle on average against
-84.0, 5.55 s in all against 5.65. Within the spread that other clusters alone bring. The field's
-read is not what a far walker waits on."""
+a site on every axis): a walker from a far jump reads the pyramid alone (``distance_bound``). Below this the field is
+read too: leaving it unread at lower thresholds gains nothing, as the field's read is not what a
+far walker waits on (docs/performance.md)."""
 GROWTH = GRID_GROWTH["lattice"]  # a module constant: numba freezes it into attach
 
 
@@ -43,7 +32,8 @@ def site(x):
 
 @borrow
 def outside(q, dim, line, lo, hi):
-    """Whether site q has left the box (for substrates: through the top)."""
+    """Whether site q (int64 (3,)) has left the box, sites ``lo`` to ``hi`` on each of ``dim`` axes
+    (with ``line``, a substrate's: through the top)."""
     if line:
         return q[dim - 1] > hi
     for a in range(dim):
@@ -60,6 +50,29 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
     cluster, else it steps (staying put when the neighbour is occupied).
     ``near`` False promises that no particle is within two sites, which
     spares the contact and occupancy tests. Returns whether it stuck.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The walker's site, moved.
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts.
+    period : int
+        A substrate's period; 0: none.
+    stickiness : float
+        The probability of sticking at a contact.
+    rs : uint64 (4,)
+        The xoshiro256+ stream.
+    near : bool
+        Whether a particle may lie within two sites.
     """
     up = dim - 1
     line = period > 0
@@ -88,6 +101,35 @@ def near_walk(
 
     It stops, without sticking, after ``budget`` steps (0: no limit), on
     leaving the box or beyond ``radius`` (0: none).
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The walker's site, moved.
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts.
+    period : int
+        A substrate's period; 0: none.
+    stickiness : float
+        The probability of sticking at a contact.
+    rs : uint64 (4,)
+        The xoshiro256+ stream.
+    boxed : bool
+        Whether the box's walls end the walk.
+    lo, hi : int
+        The box's lowest and highest site on each axis.
+    radius : float
+        Kill (or return) radius beyond which the walk ends; 0: none.
+    budget : int
+        Most steps; 0: no limit.
 
     Returns
     -------
@@ -119,7 +161,29 @@ def near_walk(
 def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
     """Whether site q touches a particle (or the substrate) under ``moves``:
     ``words.in_contact`` as the single walker's hot loop reads the words,
-    where ``_grow`` holds a copy of this body, spelled out."""
+    where ``_grow`` holds a copy of this body, spelled out.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words, the occupancy first.
+    dim : int
+        2 or 3.
+    nb0 : int
+        Words a side of the occupancy segment.
+    width, off : int
+        The grid's side in sites, and its offset.
+    q : int64 (3,)
+        The site.
+    moves : int64 (M, 3)
+        The contacts.
+    nm : int
+        ``len(moves)``.
+    line : bool
+        Whether the seed is a substrate.
+    period : int
+        A substrate's period.
+    """
     touch = False
     for m in range(nm):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
@@ -141,7 +205,17 @@ def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
 def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1, s2, s3):
     """One lattice step from site q to a random neighbour, into ``pos``
     unless the neighbour is occupied (or below the substrate); the stream
-    in registers, returned. ``_grow`` holds a copy of this body, spelled out."""
+    in registers, returned. ``_grow`` holds a copy of this body, spelled out.
+
+    Parameters
+    ----------
+    words, dim, nb0, width, off, q, moves, nm, line, period
+        As ``touches`` takes them.
+    pos : float64 (3,)
+        Receives the new site.
+    s0, s1, s2, s3 : uint64
+        The xoshiro256+ state (``walk.xo``).
+    """
     s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
     m = np.int64(u * nm)
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
@@ -164,6 +238,27 @@ def attach(points, steps, count, pending, q, dim, period, r_max, h_max, grid):
     new count, r_max, h_max, the grid's width and offset, and whether it was
     outgrown: the caller then builds a larger one from it (``words.regrow``), which marks
     this one.
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        Receives the site in row ``count``.
+    steps : uint32 (n,)
+        Receives the diffusion time.
+    count : int
+        Particles before this one.
+    pending : int
+        Its steps since the last attachment.
+    q : int64 (3,)
+        The site.
+    dim : int
+        2 or 3.
+    period : int
+        A substrate's period; 0: none.
+    r_max, h_max : float
+        The cluster's radius and height so far.
+    grid : tuple
+        The grid.
     """
     words, start, blocks, cells, field, width, off = grid
     line = period > 0
@@ -195,6 +290,25 @@ def release(rng, dim, line, launch_box, size, box_lo, box_hi, launch_r, pos):
     ``box_hi`` (``size`` of them) on each axis (``launch_box``; a substrate's
     box: its top), else a uniform point at height ``launch_r`` above the
     substrate, else of the launch circle (sphere) of radius ``launch_r``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the place.
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    launch_box : bool
+        Whether walkers start on the box's surface.
+    size : int
+        The box's side in sites (a substrate's period).
+    box_lo, box_hi : int
+        The box's lowest and highest site on each axis.
+    launch_r : float
+        The launch radius (a substrate's: launch height).
+    pos : float64 (3,)
+        Receives the place.
     """
     up = dim - 1
     if launch_box:
@@ -228,15 +342,42 @@ def distance_bound(words, field, levels, dim, width, nb0, base1, nb1, fw0, cap, 
     holds a copy of this body, spelled out. With ``from_far`` (the walker was
     released, returned or took a Brownian jump) the pyramid is read first, and
     the field's cell only where the pyramid's bound falls short of
-    ``FAR_CLEAR`` (the same bounds, the same clusters): side by side (seeds 1
-    and 2), 2D 1e7 0.939 and 0.922 times the time, 3D 3e6 0.913 and 0.995, 3D
-    1e7 1.015 (seed 1), on a host whose memory slows the large clusters more
-    (2D 1e7 on an earlier host: 1.010 and 0.984).
+    ``FAR_CLEAR``: the same bounds, with fewer reads of the field for the
+    walkers far from the cluster (docs/performance.md).
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    field : uint8 (...)
+        The Chebyshev field with the centre pyramid above it.
+    levels : int64 (L + 1,)
+        Where each level starts in ``field`` (``maps.pyramid_starts``).
+    dim : int
+        2 or 3.
+    width : int
+        The grid's side in sites.
+    nb0 : int
+        Words a side of the occupancy segment.
+    base1 : int
+        Where level 1 starts in ``words``.
+    nb1 : int
+        Words a side of level 1.
+    fw0 : int
+        The field's side in cells.
+    cap : int
+        The field's cap, ``FIELD_CAP[dim]``.
+    i, j, k : int
+        The site's cell in the grid (site + ``off``; k 0 in 2D).
+    from_far : bool
+        Whether the walker comes from far: then the pyramid is read first.
 
     Returns
     -------
     d : int
+        Chebyshev bound in sites (0: a particle may lie within two sites).
     far : float
+        Euclidean bound in sites from the pyramid, 0.0 where it gives none.
     """
     d = np.int64(5)  # off the grid: every particle lies 4 sites inside it
     far = 0.0

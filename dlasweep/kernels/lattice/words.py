@@ -27,6 +27,29 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
     ``field.field_fill`` to complete, flagging its tiles in ``held``; growth
     passes an empty array), else ``FIELD_CAP[dim]``. A coarse cell newly
     held is recorded in the centre pyramid above the field.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    cells : int64 (S,)
+        Cells a side of each segment.
+    field : uint8 (...)
+        The Chebyshev field with the centre pyramid above it.
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The particle's site.
+    period : int
+        A substrate's period (its images one period to each side are marked); 0: none.
+    cap : int
+        1 or ``FIELD_CAP[dim]``, as above.
+    held : uint8 (T,) or (0,)
+        Flags of the field's tiles that hold a particle, for ``field_fill``.
     """
     fw = (width + (1 << maps.FIELD_SHIFT) - 1) >> maps.FIELD_SHIFT
     levels = maps.pyramid_levels(dim, width, FIELD_CAP[dim])
@@ -51,6 +74,27 @@ def mark_images(words, dim, start, blocks, cells, field, width, off, q, period, 
 
 @jit
 def rebuild(points, count, dim, width, off, period):
+    """A grid for the first ``count`` particles: the occupancy and level-1 words, the
+    Chebyshev field (filled from the held cells: ``field.field_fill``) and the centre pyramid.
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        The sites, attachment order.
+    count : int
+        Particles to mark.
+    dim : int
+        2 or 3.
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    period : int
+        A substrate's period; 0: none.
+
+    Returns
+    -------
+    words, start, blocks, cells, field
+        The grid (``maps.allocate`` with two segments, ``maps.pyramid_allocate``).
+    """
     words, start, blocks, cells = maps.allocate(dim, width, 2)  # occupancy and level 1: the near test
     field = maps.pyramid_allocate(dim, width, FIELD_CAP[dim])
     q = np.zeros(3, np.int64)
@@ -80,12 +124,31 @@ def regrow(points, count, dim, width, off, period, old):
     above the first from the held cells of the level below, and the last
     particle. Substrates, whose grids grow upwards only, are built anew.
 
-    Against ``rebuild`` at the regrids of a 2D cluster of 1e6 (seed 1): 0.086 s
-    in all against 0.203 (at 506097 particles 30 ms against 142); 3D 3e5 0.143
-    against 0.186 (its levels are twice, not four times, as wide as the one below,
-    and more of them are built anew). The growth alone on one core, the same
-    clusters: 2D 1e7 60.2 and 62.7 s against 65.8 and 66.0, 1e6 4.13, 4.37 and
-    3.92 against 4.71, 4.55 and 4.10; 3D 1e6 16.8 and 15.5 against 17.6 and 17.9.
+    This costs less than ``rebuild``, most in 2D, whose pyramid levels are four
+    times as wide as the one below (3D: twice, so more of its levels are built
+    anew); the times: docs/performance.md.
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        The cluster's sites, attachment order.
+    count : int
+        Particles in the cluster, the last not yet marked in ``old``.
+    dim : int
+        2 or 3.
+    width : int
+        The new grid's side in sites.
+    off : int
+        The new grid's offset: site q is cell q + ``off``.
+    period : int
+        A substrate's period; 0: none.
+    old : tuple
+        The outgrown grid, (words, start, blocks, cells, field, width, off).
+
+    Returns
+    -------
+    words, start, blocks, cells, field
+        The new grid, as ``rebuild`` returns it.
     """
     o_words, o_start, o_blocks, _, o_field, o_width, o_off = old
     step = maps.PYRAMID_STEP[dim]
@@ -143,6 +206,8 @@ def regrow(points, count, dim, width, off, period, old):
 
 @jit
 def occupied(words, dim, start, blocks, width, off, q0, q1, q2):
+    """Whether site (q0, q1, q2) holds a particle; False outside the grid of side ``width``
+    and offset ``off`` (``words``, ``start``, ``blocks``: its words and their layout; ``dim`` 2 or 3)."""
     i, j, k = q0 + off, q1 + off, q2 + off
     if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
         return False
@@ -155,6 +220,17 @@ def site_word(dim, nb, width, off, q0, q1, q2):
 
     Scalars only, for the hot loop, which reads the word itself: a helper
     that takes the array costs atomic reference counting per call.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    nb : int
+        Words a side of the occupancy segment.
+    width, off : int
+        The grid's side in sites, and its offset.
+    q0, q1, q2 : int
+        The site.
     """
     i, j, k = q0 + off, q1 + off, q2 + off
     if i < 0 or j < 0 or k < 0 or i >= width or j >= width or k >= width:
@@ -164,7 +240,9 @@ def site_word(dim, nb, width, off, q0, q1, q2):
 
 @jit
 def in_contact(words, dim, start, blocks, width, off, q, moves, period):
-    """Whether site q touches a particle (or the substrate) under ``moves``."""
+    """Whether site q (int64 (3,)) touches a particle (or the substrate) under ``moves``
+    (int64 (M, 3)): ``occupied`` of each neighbour in the grid ``words``, ``dim``, ``start``,
+    ``blocks``, ``width``, ``off``, its first coordinates wrapped by ``period`` (0: none)."""
     for m in range(moves.shape[0]):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
         if period > 0:
@@ -180,7 +258,7 @@ def in_contact(words, dim, start, blocks, width, off, q, moves, period):
 
 @jit
 def _row2(w0, w1, w2, t):
-    """Row t (0..7) of three 8x8 words side by side: 24 sites as bits."""
+    """Row t (0..7) of the three 8x8 words ``w0``, ``w1``, ``w2`` side by side: 24 sites as bits."""
     shift = np.uint64(8 * t)
     return (
         ((w0 >> shift) & np.uint64(255))
@@ -191,7 +269,8 @@ def _row2(w0, w1, w2, t):
 
 @jit
 def word_at(words, dim, nb, x, y, z):
-    """Word (x, y, z) of the occupancy segment, empty outside the grid."""
+    """Word (x, y, z) of the occupancy segment of ``words`` (``nb`` words a side, ``dim`` 2 or 3),
+    empty outside the grid."""
     inside = 0 <= x < nb and 0 <= y < nb and 0 <= z < nb
     return words[maps.block_word(dim, 0, nb, x, y, z)] if inside else np.uint64(0)
 
@@ -200,7 +279,7 @@ def word_at(words, dim, nb, x, y, z):
 def fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
     """Chebyshev distance from site (x, y) of word b1 to the nearest particle, capped at 9.
 
-    ``a*``, ``b*``, ``c*`` are the 3x3 words (8x8 sites each, rows a below)
+    ``a0``..``a2``, ``b0``..``b2``, ``c0``..``c2`` are the 3x3 words (8x8 sites each, rows a below)
     around the walker's, which cover 8 sites on every side, so the result is
     exact below the cap. Rows of 24 sites are OR-ed outwards from the
     walker's row; the square of half-width r is hit when the OR of its rows
@@ -236,7 +315,7 @@ def _band(x, r, a, width):
 @jit
 def _masks(x, r, width, repeat):
     """Masks of sites x - r..x + r along one axis in its three words: ``_band``
-    repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
+    (groups of ``width`` bits) repeated by the multiplier ``repeat`` (the axis's stride in the word)."""
     return (
         _band(x, r, 0, width) * np.uint64(repeat),
         _band(x, r, 1, width) * np.uint64(repeat),
@@ -252,28 +331,25 @@ def fine3(words, nb, i, j, k):
     The 3x3x3 words (4x4x4 sites each, bit x + 4 y + 16 z) around the
     walker's cover 4 sites on every side; the cube of half-width r is hit
     when a word AND-ed with the masks of its x, y and z ranges is nonzero.
-    One pass over the words tests half-widths 3 and 4 at once. Against it,
-    side by side (3D 1e5, 8 seeds, four rounds), a bisection over words
-    gathered first took 1.02 to 1.12 times the growth's time from 3 (two
-    rounds at most) and, before that, from 0 (three) 1.02 to 1.09 times more.
-    Measured and not kept: the level-1 cell's dilation tested from the same words
-    in the same pass (a third set of masks), the walk's level-1 word left unread
-    (the same clusters; side by side, the cores swapped): 3D 1e5 1.15 and 1.15
-    times the time (seed 1), 1.13 and 1.14 (seed 2), 1e6 1.15 and 1.15 (seed 1):
-    the level-1 word's read costs less than the masks. Nor the occupancy words left to the walk's
-    last two sites, this bound taken from the level-1 map instead (3 unless the 27 level-1 cells about
-    the walker's are clear, then 5: the 6.3 MiB of level-1 words about a cluster of 1e7 for the
-    27.3 of occupancy; a timing copy of the walk, seed 1): 3D 1e5 100.2 steps a particle against
-    86.3, in 1.37 times the time. Nor that level-1 test asked first, this pass only where it fails
-    (the same clusters: 5 is this function's cap): of the 15.5 and 15.6 calls a particle at 3D 1e5
-    and 1e6 (3.7, 5.1 and 6.7 to 6.8 of them giving 3, 4 and 5; seed 1) it answers 4.6, and 3D 3e6 took 0.978
-    and 1.037 times the time (side by side, the cores swapped).
+    One pass over the words tests half-widths 3 and 4 at once: a bisection
+    over words gathered first is slower, and so are the variants that take
+    the level-1 cell's test from these words, or this bound from the level-1
+    map, or ask the level-1 map first (docs/performance.md).
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words; segment 0, the occupancy, comes first.
+    nb : int
+        Words a side of segment 0.
+    i, j, k : int
+        The site's cell in the grid (site + ``off``).
     """
     bx, by, bz = i >> 2, j >> 2, k >> 2
     inside = 1 <= bx < nb - 1 and 1 <= by < nb - 1 and 1 <= bz < nb - 1
     t = maps.TILE_BITS[3]
     tm = (1 << t) - 1
-    # the 27 words within one tile (about 42% of the time): at fixed steps from the first
+    # the 27 words within one tile, a frequent case: at fixed steps from the first
     one_tile = inside and 0 < bx & tm < tm and 0 < by & tm < tm and 0 < bz & tm < tm
     first = np.uint64(0)  # word (bx - 1, by - 1, bz - 1)
     if one_tile:

@@ -77,7 +77,7 @@ and ``celllist.sort_tail``, so that a gather reads a cell's particles from a str
 extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk
 loop's next pass: numba frees an array held across a loop's passes only
-when the pass ends, so building them in the same pass held both. The
+when the pass ends, so building them in the same pass would hold both. The
 centre field alone (with the pyramid above it) is kept until the new grid
 has copied it and the pyramid's first level (``grid.regrow_grid``: no
 particle lowers their cells again but those near the old grid's edge), its
@@ -85,8 +85,8 @@ pages then handed back to the OS.
 (With walkers > 1 both are still held during a rebuild: the box bounds them.)
 
 Speed note: numba counts the references of the arrays a function hands on,
-with atomic increments and decrements; perf found them taking 42% of a 2D
-growth (each inlined gather handed on 11 arrays). The walk, the attachment
+with atomic increments and decrements, a large share of a growth's time
+(each inlined gather hands on 11 arrays; docs/performance.md). The walk, the attachment
 and their helpers are therefore compiled by ``_jit.borrow``, without
 reference counting (they allocate nothing). The walk inlines the direction
 draw, the gather of the neighbour list and the ray cast (``walk.xdir``,

@@ -7,6 +7,8 @@ used tile holds its cells' heads, the first of a linked list through ``nxt``
 of the particles' rows. The rows may be stored cell after cell
 (``sort_cells``, ``sort_tail``): the lists then link rows, and the caller
 keeps each row's attachment number.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -39,7 +41,23 @@ def _cell_of(i, pts, dim, gi, gf):
 @borrow
 def insert(i, pts, nxt, dim, gi, gf, dirr, heads):
     """Push particle i on its cell's list. False, and nothing changed, when
-    its tile is new and the heads are full (give them ``more_heads``)."""
+    its tile is new and the heads are full (give them ``more_heads``).
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The links through the rows; ``nxt[i]`` receives the list's old first row.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
+    """
     t, loc = _cell_of(i, pts, dim, gi, gf)
     tile = dirr[t] - 1
     if tile < 0:
@@ -63,9 +81,26 @@ def sort_cells(pts, order, nxt, count, dim, gi, gf, dirr, heads):
     ``pts`` and ``order`` (the attachment number of the particle in each row)
     move together; ``nxt`` and ``heads`` serve as scratch, then hold the lists
     again, each cell's rows in ascending order. Nothing is allocated: the
-    permutation is followed cycle by cycle in place. The tiles renumbered in the
-    directory's order first (neighbouring tiles' heads and rows together) took 1.014
-    and 1.000 times the time at 3D 1e7 (seeds 1 and 2, the same clusters).
+    permutation is followed cycle by cycle in place. The tiles keep the
+    numbers they were given as they filled (renumbering them in the
+    directory's order first gains nothing: docs/performance.md).
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres, moved row by row.
+    order : int32 (n,)
+        Each row's attachment number, moved with its row.
+    nxt : int32 (n,)
+        Scratch, then the links through the sorted rows.
+    count : int
+        Particles to sort.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles, and the cells' heads (scratch, then the lists' first rows).
     """
     used = gi[TILES_USED] * 64
     heads[:used] = 0
@@ -97,12 +132,10 @@ def _move_rows(pts, order, nxt, first, count, dim):
     """Move the rows first..count-1 of ``pts`` and ``order`` to the rows ``nxt`` names, in
     place, cycle by cycle (``nxt`` of each then names its own row).
 
-    Each swap waits on the read before it. Measured and not kept: the rows written past
-    ``count`` first (the rows there are free until the cluster is half grown), each to its
-    place, and copied back, so that no read waits on another: on a random permutation of 3e6
-    rows 0.036 s against 0.411, but 3D growths took the same time (3e6 39.0 and 39.0 s against
-    38.8 and 38.8; 1e7 162.7 and 163.8 against 163.3 and 162.4; seed 1, side by side, the cores
-    swapped, the same clusters): a sort's rows move a short way, most of them sorted already."""
+    Each swap waits on the read before it; that costs little here, as a sort's rows move a
+    short way, most of them sorted already (a copy through free rows past ``count``, whose
+    reads do not wait, is faster on a random permutation but not in a growth:
+    docs/performance.md)."""
     for i in range(first, count):
         while nxt[i] != i:
             j = nxt[i]
@@ -123,6 +156,25 @@ def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
     ``first``, not the cluster, and their runs replace a gather's reads of
     one scattered row each. ``nxt`` of those rows serves as scratch; three
     arrays of at most ``count - first`` int32 are allocated.
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres; rows ``first`` to ``count - 1`` are moved.
+    order : int32 (n,)
+        Each row's attachment number, moved with its row.
+    nxt : int32 (n,)
+        The links through the rows.
+    first : int
+        The rows below it are sorted already.
+    count : int
+        Particles in the cluster.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
     """
     n = count - first
     below = np.empty(n, np.int32)  # per cell of the tail: its list's first row below ``first``
@@ -166,7 +218,8 @@ def sort_tail(pts, order, nxt, first, count, dim, gi, gf, dirr, heads):
 
 @jit
 def attachment_order(pts, order, count):
-    """Put the rows of ``pts`` back in attachment order (undo ``sort_cells``), in place."""
+    """Put the first ``count`` rows of ``pts`` back in attachment order (undo ``sort_cells``), in place,
+    from ``order``, each row's attachment number."""
     for i in range(count):
         while order[i] != i:
             j = order[i]
@@ -191,7 +244,23 @@ def empty_heads(dim, tiles):
 
 @jit
 def insert_all(pts, count, nxt, dim, gi, gf, dirr, heads):
-    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled)."""
+    """Push particles 0..count-1 on their cells' lists; returns the heads (more of them if they filled).
+
+    Parameters
+    ----------
+    pts : float64 (n, dim)
+        The particles' centres.
+    count : int
+        Particles to push.
+    nxt : int32 (n,)
+        Receives the links through the rows.
+    dim : int
+        2 or 3.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The directory of tiles and the cells' heads.
+    """
     for i in range(count):
         while not insert(i, pts, nxt, dim, gi, gf, dirr, heads):
             heads = more_heads(heads)
@@ -217,43 +286,48 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     into the walk, which borrows (``_jit.borrow``): inlined into a function
     that counts references, it counted those of its 11 arrays at every call.
 
-    A gather of the walk reads 27 particles in 5 of 16 cells to keep 2 (3D 1e5
-    to 1e6, 10 to 14 of them stored since the last ``sort_cells``, before ``sort_tail``); the lists
-    walked in turn, a particle of each at a time so that their reads overlap,
-    took 0.97 to 1.18 times the time at 3D 1e6 (4 seeds, the same clusters).
-    Skipping the window's cells that lie outside the ball (their box's distance
-    from c, on the axes that do not wrap) took 1.041 and 1.063 times the time at
-    3D 1e7 (seeds 1 and 2, the same clusters). In 3D the first row of each list,
-    and its link, are prefetched as its head is found (``_jit.prefetch``), so that
-    the lists' first reads overlap: side by side against none (seed 1, the same
-    clusters, the cores swapped), 3D 1e5 0.969 and 0.974 times the time, 1e6 0.934
-    and 0.984, 3e6 1.007 and 0.946, 1e7 0.970 and 0.959; in 2D, whose rows lie in
-    attachment order, 1e5 1.019 and 1.028, 1e6 0.988 and 1.010, 1e7 1.063 and 0.998.
+    The heads of the window's cells are found first (kept at the end of
+    ``li``), then their lists walked one after the other, every cell of the
+    window whole; in 3D the first row of each list, and its link, are
+    prefetched as its head is found
+    (``_jit.prefetch``), so that the lists' first reads overlap (in 2D, whose
+    rows lie in attachment order, the prefetch gains nothing). The gathers are
+    where a large off-lattice cluster's walk time grows; the breakdown, and the
+    ways of reading the lists that were tried, are in docs/performance.md.
 
-    Where a large cluster's time goes: 2D, 4.4 gathers a particle at 1e5, 1e6 and 1e7
-    (seed 1, clocked about each call) took 219, 301 and 586 ns each, 22% of the walk's
-    time at 1e5 and 37% at 1e7, 59% of the walk's growth in time a particle from 1e5 to
-    1e7 (the rest of a walk step: 78 ns at 1e5, 88 at 1e7); 3D, 11 a particle, 417, 603
-    and 660 ns at 1e5, 1e6 and 3e6, 34% of the walk's time at each and 35% of its growth
-    from 1e5 to 3e6 (the rest of a walk step: 98 ns at 1e5, 134 at 3e6). Again on the
-    time-stamp counter about each pass of the 3D walk (seed 1, before the prefetch above),
-    a particle's walk took 19.4k cycles at 1e5, 20.6k at 1e6 and 29.3k at 1e7: its 11.0
-    gathers 601, 612 and 914 cycles each (3.5k of the 9.9k it grew), its exits from the
-    pyramid's balls 11.2, 17.7 and 26.2 a particle at 209 to 270 cycles (4.8k), its jumps
-    bounded by the centre field 37.0 to 38.1 a particle at 145 to 180 cycles (1.5k). The
-    round-robin walk above at 2D 1e7, side by side (seeds 1 and 2, the same clusters):
-    28.07 and 24.53 s of gathers against 28.07 and 24.88; the lists walked first for
-    their rows, the rows read after (reads that no longer wait on one another), 31.26
-    and 31.24 s against 34.25 and 29.57. A gather reads 18.8 particles from 1.9 cells
-    in 2D (1e5 and 1e6), 26.8 from 5.2 in 3D. Rows by cell (``grow.BY_CELL``)
-    cut 2D 1e7's gathers to 20.19 s from 28.29, and their sorts took 10.30 s of grid
-    work against 3.25. The particles' numbers by cell instead, the rows left in place
-    (each cell's run of numbers, rebuilt by a counting sort each time the cluster grew
-    by a 32nd, the newer particles from the lists): 2D 1e7 (seeds 1 and 2, the same
-    clusters), 575 and 544 ns a gather against 719 and 681, 1e5 331 and 298 against
-    259 and 261; the rebuilds took 10.68 s of grid work against 3.41. Rebuilt each
-    time it grew by a quarter: 647 and 629 ns against 674 and 640 at 1e7, as the
-    walkers' gathers read mostly the particles attached since.
+    Parameters
+    ----------
+    c : float64 (3,)
+        The point (z 0 in 2D).
+    r : float
+        The radius, centre distance.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period (its images are wrapped to the nearest c); else unused.
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The cell list's links through the rows.
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry (``geometry.layout``).
+    gf : float64 (GF_SLOTS,)
+        The grid's float geometry.
+    dirr : int32 (...)
+        The directory of tiles.
+    heads : int32 (...)
+        The cells' heads, 64 a tile in use.
+    lx, ly, lz : float64 (LCAP,)
+        Receive the centres found (lz 0 in 2D).
+    li : int64 (LCAP,)
+        Receive their rows.
+
+    Returns
+    -------
+    count : int
+        Particles found.
+    nearest2 : float
+        The smallest squared centre distance among them (inf when none).
     """
     r2 = r * r
     nl = 0
@@ -270,7 +344,7 @@ def gather(c, r, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     m = (1 << tb) - 1
     half = 0.5 * size
     # first the heads of the window's cells, kept at the end of li, then their lists: the
-    # reads of the lists' first particles no longer wait on one another
+    # reads of the lists' first particles do not wait on one another
     top = len(li) - 1
     nh = 0
     for k2 in range(lo2, hi2 + 1):

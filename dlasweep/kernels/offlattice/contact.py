@@ -30,6 +30,23 @@ def ray_to(w, u0, u1, u2, length, nl, lx, ly, lz, line, dim):
     touch it at up = 0), -1 means no contact. The direction comes as scalars
     and the helper is inlined, so that the walk's hot loop casts its short
     rays with no call and no reference counting.
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre (z 0 in 2D).
+    u0, u1, u2 : float
+        The ray's unit direction.
+    length : float
+        How far the ray reaches.
+    nl : int
+        How many centres of the list to test.
+    lx, ly, lz : float64 (LCAP,)
+        The listed centres (``celllist.gather``).
+    line : bool
+        Whether a substrate lies at up = 0.
+    dim : int
+        2 or 3.
     """
     best = length
     hit = -1
@@ -59,7 +76,8 @@ def ray_to(w, u0, u1, u2, length, nl, lx, ly, lz, line, dim):
 
 @borrow
 def ray(w, u, length, nl, lx, ly, lz, line, dim):
-    """``ray_to`` along the direction ``u[:3]``."""
+    """``ray_to`` along the direction ``u[:3]``; ``w``, ``length``, ``nl``, ``lx``, ``ly``, ``lz``,
+    ``line`` and ``dim`` are ``ray_to``'s."""
     return ray_to(w, u[0], u[1], u[2], length, nl, lx, ly, lz, line, dim)
 
 
@@ -68,7 +86,27 @@ def settle(w, u, t, hit, dim, lx, ly, lz, li, normal):
     """Move w to w + t u and put it at distance 1 exactly from what it hit;
     ``normal`` gets the outward unit normal at the contact in its first
     three entries and, in the fourth, the particle touched (``li[hit]``;
-    -1: the substrate), which becomes the parent of a walker that sticks."""
+    -1: the substrate), which becomes the parent of a walker that sticks.
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre, moved to contact.
+    u : float64 (3,)
+        The ray's unit direction.
+    t : float
+        How far along ``u`` the contact lies (``ray_to``).
+    hit : int
+        What the ray hit: an index into the list, or -2 for the substrate.
+    dim : int
+        2 or 3.
+    lx, ly, lz : float64 (LCAP,)
+        The listed centres.
+    li : int64 (LCAP,)
+        Their rows.
+    normal : float64 (4,)
+        Receives the normal and the particle touched.
+    """
     for a in range(3):
         w[a] += t * u[a]
     if hit == -2:
@@ -97,6 +135,36 @@ def cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, l
 
     Long rays go in pieces of at most 2 so the gathered lists stay short.
     Returns True on contact (w then at contact, ``normal`` set).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre, moved along the ray.
+    u : float64 (3,)
+        The ray's unit direction.
+    length : float
+        How far to cast.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period (``celllist.gather``).
+    line : bool
+        Whether a substrate lies at up = 0.
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The cell list's links through the rows (``celllist``).
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads.
+    lx, ly, lz : float64 (LCAP,)
+        Scratch for the centres gathered about the ray (``celllist.gather``).
+    li : int64 (LCAP,)
+        Scratch for their rows.
+    normal : float64 (4,)
+        Scratch for the pieces' midpoints; at a contact, receives the normal
+        and the particle touched (``settle``).
     """
     c = normal  # scratch until a contact sets it
     left = length
@@ -127,6 +195,45 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
     overlap another particle, a full ray cast along the step decides.
     ``e`` and ``u`` are scratch (3,): it allocates nothing, as numba compiles it
     without reference counting when the first caller to need it borrows (``_jit.borrow``).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre, moved.
+    step : float
+        The Gaussian step's standard deviation per axis (``model.step``).
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period, read where the axes wrap (``celllist.gather``, ``grid.map_dist``).
+    line : bool
+        Whether a substrate lies at up = 0.
+    rng : numpy.random.Generator
+        Draws the step.
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The cell list's links through the rows (``celllist``).
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads.
+    words : uint64 (...)
+        The dilated maps (``grid.map_dist``).
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout (``maps.layout``).
+    field : uint8 (...)
+        The centre field with the pyramid above it.
+    lx, ly, lz : float64 (LCAP,)
+        Scratch for the centres gathered about the ray (``celllist.gather``).
+    li : int64 (LCAP,)
+        Scratch for their rows.
+    e : float64 (3,)
+        Scratch: the proposed end point, then the contact tried.
+    u : float64 (3,)
+        Scratch: the step's direction.
+    normal : float64 (4,)
+        At a contact, receives the normal and the particle touched (``settle``).
     """
     up = dim - 1
     for a in range(dim):
@@ -164,7 +271,41 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
 def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
     """A walker at contact: sticks with probability ``stickiness`` (True), else
     moves away by ``REJECT`` into the outward half-space, ray-cast, and
-    tries again at every new contact. Returns (stuck, moves made)."""
+    tries again at every new contact. Returns (stuck, moves made).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre, at contact; moved.
+    u : float64 (3,)
+        Scratch for the move's direction.
+    normal : float64 (4,)
+        The contact's normal and particle (``settle``), renewed at each new contact.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period (``celllist.gather``).
+    line : bool
+        Whether a substrate lies at up = 0.
+    stickiness : float
+        The probability of sticking at a contact.
+    rng : numpy.random.Generator
+        Draws the sticking (``model.sticks``).
+    rs : uint64 (4,)
+        The xoshiro256+ stream that draws the directions (``walk.unit_vector``).
+    pts : float64 (n, dim)
+        The particles' centres.
+    nxt : int32 (n,)
+        The cell list's links through the rows (``celllist``).
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads.
+    lx, ly, lz : float64 (LCAP,)
+        Scratch for the centres gathered about the ray (``celllist.gather``).
+    li : int64 (LCAP,)
+        Scratch for their rows.
+    """
     moves = 0
     while True:
         if sticks(stickiness, rng):

@@ -15,12 +15,9 @@ LINE_PAD = 32
 """Periodic images are marked in the maps up to this distance (line seed)."""
 CELL_SIDE = (8, 4)
 """Side of the cell list's cells (diameters), 2D and 3D: a power of two, a multiple of the coarse
-cells' ``2**FS``. A side of 4 puts four times the area under a tile's 64 heads: memory added by
-growth, 2D 1e7 37.8 -> 29.3 B/particle, 3D 3e5 53.4 -> 44.8, against a side of 2, with the same
-particles gathered (the same clusters) in the same time (2D 1e6, A/B: 10.53 s against 10.61).
-A side of 8 in 2D again: 2D 1e7 32.24 -> 30.62, the same clusters, 6% slower (61.1 s against
-57.5, side by side), as a gather reads twice the particles; cells of 8 by 4 saved half as much
-memory in the same time (62.9 s against 59.4)."""
+cells' ``2**FS``. A larger side puts more area under a tile's 64 heads, so that fewer tiles (and
+less memory) follow the cluster, while a gather reads more particles a cell: 4 is the balance in
+3D; 2D's 8 saves memory for some time a gather (the sides tried: docs/performance.md)."""
 GROW = GRID_GROWTH["offlattice"]
 """The grids' growth (``model.GRID_GROWTH``), a module constant that numba freezes into the kernels."""
 
@@ -47,7 +44,11 @@ GF_SLOTS = 8
 @jit
 def layout(dim, line, size, need):
     """Grid geometry covering a cluster of extent ``need`` (max |coordinate|
-    for point seeds, h_max for a substrate), with room to grow."""
+    for point seeds, h_max for a substrate), with room to grow: ``gi`` and ``gf``.
+
+    ``dim`` is 2 or 3; ``line`` whether the seed is a substrate, whose
+    period is ``size``; else ``size`` is the box's side (0: no box), which
+    bounds the grid."""
     gi = np.zeros(GI_SLOTS, np.int64)
     gf = np.zeros(GF_SLOTS)
     tb = 3 if dim == 2 else 2

@@ -13,6 +13,8 @@ layout).
 A grid is the tuple ``(gi, gf, words, start, blocks, cells, dirr, heads,
 field)`` that ``build_grid`` returns: the geometry (``geometry.layout``), the
 maps, the cell list's directory and heads (``celllist``), and the field.
+
+Throughout, ``dim`` is the dimension (2 or 3).
 """
 
 import numpy as np
@@ -51,7 +53,27 @@ from .geometry import (
 @borrow
 def mark(i, pts, dim, size, gi, words, start, blocks, cells, field):
     """Mark particle i in the maps, the centre field and the centre pyramid above
-    it (where its coarse cell is newly held), with its periodic images near the edges."""
+    it (where its coarse cell is newly held), with its periodic images near the edges.
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts : float64 (n, dim)
+        The particles' centres.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry (``geometry.layout``).
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout: where each level starts, its words and its cells a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     W = gi[MAP_WIDTH]
     reach = 1 if gi[PERIODIC] == 1 else 0
     reach2 = reach if dim == 3 else 0
@@ -83,8 +105,7 @@ def _allocate_maps(dim, gi):
     ``FS`` and up are read only where the field is at its cap with no
     pyramid above it (a substrate, a small grid): where the walk is near,
     level ``FS`` is set. With a pyramid they are left out, a quarter of the
-    maps and their marks (memory added by growth, 2D 1e7: 32.52 -> 32.25
-    bytes a particle). ``start`` is shifted so that level s still begins at
+    maps and their marks (the memory saved: docs/performance.md). ``start`` is shifted so that level s still begins at
     ``start[s]``.
     """
     pyramid = maps.pyramid_levels(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS]) > 1
@@ -125,7 +146,32 @@ def _empty_grid(dim, line, size, need, tiles):
 @jit
 def build_grid(dim, line, size, need, pts, count, nxt, tiles):
     """Maps and cell list for particles 0..count-1, sized for ``need``, with
-    room for ``tiles`` cell-list tiles (the old grid's count: few change)."""
+    room for ``tiles`` cell-list tiles (the old grid's count: few change).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    size : int
+        The box's side, or a substrate's period.
+    need : float
+        The cluster's extent to cover: max |coordinate|, or h_max above a substrate.
+    pts : float64 (n, dim)
+        The particles' centres.
+    count : int
+        Particles to put in the grid.
+    nxt : int32 (n,)
+        Receives the cell list's links.
+    tiles : int
+        Cell-list tiles to make room for.
+
+    Returns
+    -------
+    gi, gf, words, start, blocks, cells, dirr, heads, field
+        The grid (the module docstring).
+    """
     gi, gf, words, start, blocks, cells, dirr, heads, field = _empty_grid(dim, line, size, need, tiles)
     heads = insert_all(pts, count, nxt, dim, gi, gf, dirr, heads)
     for i in range(count):
@@ -146,18 +192,24 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
     (the last, outside it, among them); the levels above the first are built
     from the held cells of the level below (``centres.levels_from_held``), as in
     the lattice's ``words.regrow``. Every stored value is a maximum or a union
-    over particles or held cells, so the order does not matter. Before, each
-    coarse cell lowered the pyramid about it, (2 ``FCAP`` - 1)**dim cells of the
-    first level; a rebuild now costs a particle its insert, its level-1 marks and
-    the reads of the copy: the last rebuild of a cluster of 1e6 (from the grid
-    of two thirds of its extent), 2D 0.101 s against 0.271, 3D 0.252 against
-    0.634; of 1e5 0.014 against 0.039 and 0.035 against 0.055. The growth, the
-    same clusters: 2D 1e7 side by side 0.92 and 0.98 times the time; 3D 1e6 on
-    one core, three runs each, 25.33 s against 25.34. ``old_field``'s pages go
+    over particles or held cells, so the order does not matter. A rebuild
+    costs a particle its insert, its level-1 marks and the reads of the copy,
+    not the (2 ``FCAP`` - 1)**dim cells of the first level that marking its
+    coarse cell again would lower (the rebuilds' times: docs/performance.md).
+    ``old_field``'s pages go
     back to the OS once copied. Without a first level in both grids each coarse
     cell lowers the pyramid once (from the first particle pushed on its cell
     list's cell of those in it). Substrates (whose cell list's cells are not
     coarse cells) are built anew.
+
+    Parameters
+    ----------
+    dim, line, size, need, pts, count, nxt, tiles
+        As ``build_grid`` takes them; ``tiles`` is the old grid's count.
+    old_gi : int64 (GI_SLOTS,)
+        The outgrown grid's geometry.
+    old_field : uint8 (...)
+        The outgrown grid's centre field and pyramid; its pages go back to the OS.
     """
     if line:
         return build_grid(dim, line, size, need, pts, count, nxt, tiles)
@@ -224,7 +276,8 @@ def _first_in_coarse_cell(i0, i1, i2, j, pts, nxt, dim, gi):
 
 @jit
 def face_gap(X0, X1, X2, dim, s):
-    """Distance from the grid point X to the nearest face of its cell of side ``2**s``.
+    """Distance from the grid point X = (X0, X1, X2) to the nearest face of its cell of side ``2**s``
+    (X2 read only where ``dim`` is 3).
 
     Scalars only, so that the walk's hot loop pays no reference counting.
     """
@@ -245,9 +298,8 @@ centres lie within a cell's diagonal of w (w's own and those ``centre_bound`` re
 centre field's cap, every particle ``field_reach`` or more from their centres, and the field
 bounds less than the pyramid. A walker that comes from far (the launch circle, a return to it, a
 ball's exit) reads the pyramid first and, beyond this, not the field (``walk_bound``): the same
-bound and ball, the same clusters. Side by side (one core each, seeds 1 and 2): 2D 1e7 0.864 and
-0.918 times the time, 3D 3e6 0.877 (seed 1); 2D 1e6 1.012 and 1.014, 3D 1e6 1.002 and 1.091: the
-field's cells about the cluster's far walkers outgrow the caches."""
+bound and ball, the same clusters: the field's cells about the cluster's far walkers outgrow the
+caches, so a large cluster's far walkers gain the most from not reading them (docs/performance.md)."""
 NEAR = 2.0
 """Where the centre field bounds no more than this, the level-1 map decides:
 clear, every centre lies 2 or more away; set, the walker takes the neighbour list."""
@@ -268,6 +320,23 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
     set (look closer), -1 off the map. At the field's cap, away from periodic
     sides, the centre pyramid above the field bounds instead of the maps
     (``pyramid_dist``). (``walker.walk_to_contact`` spells this out inline.)
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The point (z 0 in 2D).
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry.
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout: where each level starts, its words and its cells a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
     """
     W = gi[MAP_WIDTH]
     x0 = w[0]
@@ -313,7 +382,8 @@ def map_dist(w, dim, size, gi, words, start, blocks, cells, field):
 
 @jit
 def walk_geometry(gi, cells, dim):
-    """The grid's scalar constants that ``walk_bound`` takes, worked out once per walk:
+    """The scalar constants of the grid ``gi`` (its maps' ``cells`` a side by level) that
+    ``walk_bound`` takes, worked out once per walk:
     (periodic, m0, m1, m2, W, fw, flo, ftop). (The centre pyramid's
     level starts, an array, come from
     ``level_starts`` once per grid: the walk allocates nothing.)"""
@@ -330,7 +400,8 @@ def walk_geometry(gi, cells, dim):
 
 @jit
 def level_starts(gi, dim):
-    """Where each level of the grid's distance pyramid starts (``maps.pyramid_starts``)."""
+    """Where each level of the distance pyramid of the grid ``gi`` (its geometry) in ``dim``
+    dimensions starts (``maps.pyramid_starts``)."""
     return maps.pyramid_starts(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS])
 
 
@@ -354,6 +425,37 @@ def walk_bound(w, dim, size, per, m0, m1, m2, W, words, start, blocks, field, fw
     of w's cell of the pyramid level that holds no particle centre, w's distance to that centre
     and the level's shift, from which the walk jumps out of that ball; elsewhere a radius of 0.0
     (the distance and shift are then those of a pyramid read that gave no bound, or 0.0 and 0).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre; its periodic coordinates are wrapped in place.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    per : bool
+        Whether the grid is periodic (``walk_geometry``).
+    m0, m1, m2 : float
+        Where coordinate 0 falls in the maps, per axis.
+    W : float
+        The maps' side in unit cells.
+    words : uint64 (...)
+        The dilated maps (``_allocate_maps``).
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The maps' layout: where each level starts, and its words a side.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    fw : int
+        The centre field's side in coarse cells.
+    flo : int
+        The highest map level known clear where the field is at its cap.
+    ftop : int
+        One past the highest map level searched.
+    pstart : int64 (L + 1,)
+        Where each level starts in ``field`` (``level_starts``).
+    far : bool
+        Whether the walker comes from far: then the pyramid is read first.
     """
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1

@@ -18,29 +18,35 @@ from .walker import HEADS_FULL, attach, index_late, neighbour_list, walk_to_cont
 
 BY_CELL = (False, False, False, True)
 """By dimension: whether the particles' rows are stored cell after cell while the cluster grows
-(``celllist.sort_cells``), at 4 bytes a particle for their attachment numbers. 2D rows by cell,
-1e7 side by side (seeds 1 and 2): 1.056 and 1.048 times the time (the same clusters); again with
-the tail sorts (``TAIL_SORT``), seed 1: 1e6 1.031, 1e7 1.059 times, the peak 18 MB higher."""
+(``celllist.sort_cells``), at 4 bytes a particle for their attachment numbers. 3D only: a 3D
+gather reads several cells' lists, which then lie in a stretch or two of rows; in 2D the sorts
+cost more time than they save (docs/performance.md)."""
 SORT_FIRST = 4096
 """Particles at the first sort (fewer fit in the caches whatever their order)."""
 SORT_GROWTH = 1.25
 """The rows are sorted again each time the cluster has grown by this factor: the newest
-particles, sorted apart (``TAIL_SORT``), are a fifth of all at most. 3D 3e6, one after the other on one
-core (a benchmark on the other): 1.1 took 64.0 s against 60.9, 1.5 60.3 against 58.5."""
+particles, sorted apart (``TAIL_SORT``), are a fifth of all at most. A smaller factor sorts too
+often, a larger one leaves too many rows to the tail sorts (the factors tried: docs/performance.md)."""
 TAIL_SORT = 32
 """Between sorts, the rows attached since the last are sorted by cell (``celllist.sort_tail``) each
-time the cluster has grown by a ``TAIL_SORT``-th: walkers arrive where the cluster grows, and a
-gather read more than half its particles (3D 1e6, 14 of 27; 3e6, 16) from rows attached since the
-last sort, one scattered row each; with these sorts, 3 of 27 are read from rows stored since
-the last. 3D 1e7 side by side (seeds 1 and 2, the same clusters): 0.973
-and 0.945 times the time, the sorts 7.6 s of 219 (alone on a core), the peak 18 MB higher. Against
-32, 3D 3e6 side by side (seed 1, the cores swapped): 96 took 1.033 and 1.031 times the time, 20
-took 1.010 and 1.024."""
+time the cluster has grown by a ``TAIL_SORT``-th: walkers arrive where the cluster grows, so
+without these sorts a gather reads more than half its particles from rows attached since the last
+full sort, one scattered row each; with them, few (the counts, the gain and the divisors tried:
+docs/performance.md)."""
 
 
 @jit
 def _grow(dimension, lockstep, n, model, marks, rng, times):
     """Grow an off-lattice cluster of up to ``n`` particles.
+
+    After the seed, ``walker.walk_to_contact`` brings one walker at a time to
+    contact and ``walker.attach`` adds it; with more than one walker
+    ``lockstep.grow_in_lockstep`` takes over instead. The rows are sorted by
+    cell as the cluster grows (``BY_CELL``, ``SORT_GROWTH``, ``TAIL_SORT``) and
+    put back in attachment order at the end. A grid the cluster outgrows is
+    dropped at once and the larger one built at the top of the next pass, where
+    numba has freed the old arrays (its centre field carried over:
+    ``grid.regrow_grid``).
 
     Parameters
     ----------
@@ -49,11 +55,14 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
     lockstep : None or True
         ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
     n : int
+        Most particles to grow, the seed's included.
     model : Model
         The model (``kernels.model.Model``).
     marks : int64 (K,)
         Particle counts at which to read the clock, ascending.
     rng : numpy.random.Generator
+        Seeds the walk's xoshiro256+ stream (``walk.seed_stream``) and draws
+        what the walk draws from it (``walker.walk_to_contact``'s ``rng``).
     times : float64 (K,)
         Filled with the seconds at each mark as it passes.
 
@@ -163,7 +172,23 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
 def _grow_each(dimension, lockstep, n, model, marks, rngs, times):
     """``_grow`` with each generator of the list ``rngs`` in turn (row i of ``times``); its results and seconds.
 
-    ``dimension`` (the model's) is a literal: each is compiled apart, and only when used."""
+    Parameters
+    ----------
+    dimension : int
+        The model's dimension, a literal: each is compiled apart, and only when used.
+    lockstep, n, model, marks
+        As ``_grow`` takes them.
+    rngs : list of numpy.random.Generator
+        One generator a cluster (a reflected list: ``_jit``).
+    times : float64 (B, K)
+        Row i receives cluster i's seconds at each mark.
+
+    Returns
+    -------
+    list of tuple
+        For each generator, ``_grow``'s points, steps, parents, count and
+        status, its row of ``times`` and the growth's seconds.
+    """
     literally(dimension)
     out = []
     for i in range(len(rngs)):
@@ -176,7 +201,8 @@ def _grow_each(dimension, lockstep, n, model, marks, rngs, times):
 def grow_offlattice(n, p, marks, rngs, times=None):
     """Grow off-lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow``.
 
-    Takes and returns what ``lattice.grow_lattice`` does, but ``points`` are
+    Takes (``n``, ``p``, ``marks``, ``rngs``, ``times``) and returns what
+    ``lattice.grow_lattice`` does, but ``points`` are
     the float64 centres of unit-diameter disks (spheres), (n_grown, dim), and
     a parent is the particle touched at contact (``contact.settle``).
     """

@@ -21,6 +21,41 @@ def grow_in_lockstep(n, model, marks, rng, rs, t0, times, passed, pts, order, st
     wall removes it, and one that a new particle covers merges into it.
     Takes over from ``grow._grow`` once the seed is placed (its arguments are
     ``_grow``'s state) and returns (count, status).
+
+    Parameters
+    ----------
+    n : int
+        Most particles to grow.
+    model : Model
+        The model (``kernels.model.Model``).
+    marks : int64 (K,)
+        Particle counts at which to read the clock.
+    rng : numpy.random.Generator
+        Draws the walkers' places, the sticking and the Gaussian steps.
+    rs : uint64 (4,)
+        The xoshiro256+ stream of the walkers' directions.
+    t0 : float
+        The clock at the growth's start (``_jit.clock``).
+    times : float64 (K,)
+        Receives the seconds at each mark.
+    passed : int
+        Marks passed already (``model.checkpoint``).
+    pts : float64 (n, dim)
+        The particles' centres, the seed's filled.
+    order : int32 (0,)
+        Empty: with many walkers the rows stay in attachment order.
+    steps : uint32 (n,)
+        Receives the diffusion times.
+    parents : int32 (n,)
+        Receives the parents.
+    nxt : int32 (n,)
+        The cell list's links.
+    count : int
+        Particles so far (the seed's).
+    geo : float64 (3,)
+        The cluster's r_max, Chebyshev extent and h_max.
+    grid : tuple
+        ``(gi, gf, words, start, blocks, cells, dirr, heads, field)``, as ``grid.build_grid`` returns it.
     """
     dim, size, step, stickiness = model.dim, model.size, model.step, model.stickiness
     walkers, max_steps = model.walkers, model.max_steps

@@ -29,11 +29,8 @@ from .grid import FAR_CLEAR, NEAR, face_gap, mark, walk_geometry
 LIST_RADIUS = 3.0
 """Radius (centre distance) of the cached neighbour list. Longer lists give
 longer exact jumps and serve longer, but a gather visits (r + 1)**dim cells
-of linked lists: side by side at 2D 1e6, radius 6 took 99 steps per particle
-against 107 at radius 3, in the same time (15.2 against 15.5 s, two rounds),
-and radius 4 made 3D 1e5 slower (4.2 against 3.0 s). Against radius 3, side by side (seeds 1
-and 2): 2D 1e7, radius 4 1.113 and 1.014 times the time, radius 2 1.059 and 1.053 (55.4 steps a
-particle against 50.4); 3D 3e6, radius 4 1.070 and 1.088, radius 2.5 1.079 and 0.923."""
+of linked lists; 3 is where the two balance in 2D and 3D (the radii tried:
+docs/performance.md)."""
 LCAP = 1024
 """Capacity of the neighbour lists (a packing within radius 6 in 2D or 3 in
 3D holds < 200)."""
@@ -52,7 +49,27 @@ def release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
     """Put a new walker at w: uniformly on the launch circle (sphere), on the
     launch line (plane) above a substrate, or, with ``launch_box``, on the
     box's faces (its top face above a substrate). Returns the stream state
-    (registers: see ``walk.xdir``)."""
+    (registers: see ``walk.xdir``).
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        Receives the walker's place.
+    dim : int
+        2 or 3.
+    size : int
+        The box's side, or a substrate's period.
+    line : bool
+        Whether the seed is a substrate.
+    launch_box : bool
+        Whether walkers start on the box's faces.
+    launch_r : float
+        The launch radius (a substrate's: launch height).
+    rng : numpy.random.Generator
+        Draws the place on a line or box.
+    s0, s1, s2, s3 : uint64
+        The xoshiro256+ state that draws a direction on the launch circle.
+    """
     up = dim - 1
     hb = 0.5 * size
     if launch_box:
@@ -82,45 +99,105 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                     mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, pstart, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
 
-    One walker at a time. Two in flight, their steps interleaved so that one's memory
-    reads overlap the other's (a timing prototype: the second walker on its own stream,
-    released again when the new particle lands within 40 of it, 0.3% of particles at
-    2D 1e7), took per walk step, 2D seed 1 side by side at 1e6 and 1e7, 109.2 and 150.3
-    ns against 103.4 and 146.9, 122.0 and 160.1 against 127.6 and 151.7; with a
-    prefetch of the next step's field or pyramid cell, 103.5 and 131.3 against 93.8
-    and 124.6; 3D, 24.7 us a particle at 3e6 against 22.2 (108.0 steps a particle
-    against 103.0: 0.9% of walkers released again, 10% at 1e5). Keeping two walkers'
-    state costs what their overlapped reads save: the step's own reads are not where
-    a large cluster's time grows (``celllist.gather``).
+    One walker at a time, released (``release``) and walked to contact; a
+    walker absorbed by the kill sphere or a wall, or escaped in 3D, is
+    replaced by a new one. Each pass of the loop finds a lower bound ``g`` on
+    the walker's free distance (surface gap): exact from the cached neighbour
+    list while the walker stays within it, else from the map query
+    (``grid.walk_bound``, spelled out inline and pinned by
+    ``tests/test_pins.py``), the centre pyramid's ball and the cluster's
+    bounding circle, and then moves: out of the pyramid cell's ball
+    (``walk.ball_exit``), onto the sphere of radius ``g``, by a ray cast of
+    length ``RAY`` inside the ``EPS`` shell, by a unit step (no jumps), or by a
+    Gaussian step (``model.step`` > 0).
+
+    It is shaped for its speed: every array is an argument, borrowed
+    (``_jit.borrow``: no reference counting, nothing allocated here: see the
+    package note); the stream's state stays in registers (``s0`` .. ``s3``)
+    and is written back to ``rs`` around the calls that draw from it; the map
+    query is spelled out rather than called. One walker is in flight at a
+    time: interleaving two walkers' steps, so that their memory reads
+    overlap, would save no more than keeping their two states costs
+    (docs/performance.md).
 
     Parameters
     ----------
     dimension : int
-        The model's dimension, a literal: each is compiled apart, its
-        branches on ``dim`` folded away: 2D 1e6, six runs side by side on
-        the two cores, 0.83 to 1.02 of the time (median 0.955); 3D 3e5, 0.95 to 1.00.
+        The model's dimension (2 or 3), a literal (``numba.literally``): each
+        dimension is compiled apart, so that LLVM folds the branches on
+        ``dim`` away (``_jit``; docs/performance.md has the gain).
     model : Model
-        The model (``kernels.model.Model``).
-    launch_r, kill_r : float
-        Launch radius (height above a substrate) and kill radius now.
-    total, pending : int
-        Steps taken in all, and since the last attachment.
+        The model (``kernels.model.Model``): size, step, stickiness, jumps,
+        step budget, exact return, kill, seed shape and launch.
+    launch_r : float
+        Launch radius now (a substrate's: launch height).
+    kill_r : float
+        Kill radius now (a substrate's: kill height); read only with ``model.kill``.
+    total : int
+        Steps taken in all before this call; the budget ``model.max_steps`` counts these.
+    pending : int
+        Steps since the last attachment: the new particle's diffusion time.
     w : float64 (3,)
-        Receives the walker's place where it sticks.
+        Scratch for the walker's place; receives where it sticks (z 0 in 2D).
+    u : float64 (3,)
+        Scratch for a move's direction; holds the last ray's direction at a contact.
+    normal : float64 (4,)
+        Receives, at a contact, the outward unit normal and, in ``normal[3]``,
+        the row of the particle touched (-1: the substrate; ``contact.settle``).
+    scratch : float64 (3,)
+        Scratch for the exact return (``walk.return_to_sphere``) and the Gaussian step.
+    anchor : float64 (3,)
+        Scratch: the point the neighbour list was gathered about.
+    lx, ly, lz : float64 (LCAP,)
+        The neighbour list's centres, the images nearest ``anchor``
+        (``neighbour_list``, filled by ``celllist.gather``).
+    li : int64 (LCAP,)
+        The neighbour list's rows of ``pts``.
+    mx, my, mz : float64 (LCAP,)
+        A second list's centres, scratch for the casts straight from the cell
+        list (``contact.cast``, ``contact.gauss_move``, ``contact.rebound``).
+    mi : int64 (LCAP,)
+        The second list's rows.
+    pts : float64 (n, dim)
+        The particles' centres, row by row (rows by cell in 3D: ``celllist.sort_cells``).
+    nxt : int32 (n,)
+        The cell list's links through the rows (``celllist``).
+    gi : int64 (GI_SLOTS,)
+        The grid's integer geometry (``geometry.layout``).
+    gf : float64 (GF_SLOTS,)
+        The grid's float geometry.
+    words : uint64 (...)
+        The dilated maps (``grid._allocate_maps``).
+    start : int64 (S + 1,)
+        Where each map level starts in ``words``.
+    blocks : int64 (S,)
+        Words a side of each map level.
+    cells : int64 (S,)
+        Cells a side of each map level.
+    dirr : int32 (...)
+        The cell list's directory of tiles (``celllist``).
+    heads : int32 (...)
+        The cell list's heads, 64 a tile in use.
+    field : uint8 (...)
+        The centre field with the centre pyramid above it (``centres``).
+    pstart : int64 (L + 1,)
+        Where each level of ``field`` starts (``grid.level_starts``).
+    geo : float64 (3,)
+        The cluster's r_max, Chebyshev extent and h_max.
     rs : uint64 (4,)
-        The xoshiro256+ stream; ``rng`` the numpy Generator.
-    The rest: scratch arrays, the neighbour lists and the grid (``grid``),
-    ``pstart`` the centre pyramid's level starts (``grid.level_starts``);
-    ``geo`` holds r_max, the Chebyshev extent and h_max.
+        The xoshiro256+ stream of the walk's directions, read at the start and written back.
+    rng : numpy.random.Generator
+        Draws the releases on a line or box, the exact returns, the sticking
+        and the Gaussian steps.
 
     Returns
     -------
     stuck : bool
         True when a walker stuck at w, False when the budget ran out.
-    total, pending : int
-
-    Every array is an argument, borrowed (``_jit.borrow``: no reference
-    counting, and nothing allocated here); see the package note.
+    total : int
+        Steps taken in all.
+    pending : int
+        Steps since the last attachment.
     """
     literally(dimension)
     dim = np.int64(2) if dimension == 2 else np.int64(3)  # a constant, not a literal (``_jit``)
@@ -204,10 +281,10 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 else:
                     list_ok = False
             if not exact:
-                if not line:  # a square root (6% of the walk at 2D 1e6) only where the list does not decide
+                if not line:  # a square root, taken only where the list does not decide (docs/performance.md)
                     ggeo = max(np.sqrt(r2) - r_max, ch - extent) - 1.0
-                # >>> walk_bound, spelled out: inlined by numba it made the walk 13% slower (a test
-                # holds the two texts together, and walk_bound to map_dist)
+                # >>> walk_bound, spelled out: numba's inlining of it is slower (docs/performance.md; a
+                # test holds the two texts together, and walk_bound to map_dist)
                 bs = 3 if dim == 2 else 2
                 bm = (1 << bs) - 1
                 x0 = w[0]
@@ -292,8 +369,8 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 continue
             if step == 0.0 and jumps and g >= EPS:
                 # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
-                # holds the copies together): one condition for both timed 25% slower at
-                # 2D 1e6 once (even at 3e5, on a loaded machine), so the tested shape stays
+                # holds the copies together): one condition for both is slower
+                # (docs/performance.md), so the tested shape stays
                 s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 w[0] += g * u0
                 w[1] += g * u1
@@ -385,7 +462,48 @@ def attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim,
     Returns the new count and ``IN_GRID``, ``HEADS_FULL``, or, when the cluster outgrew the grid, its count of
     cell-list tiles (then the particle is not yet in the grid: the caller
     drops it and builds a larger one). It takes the grid's arrays one by one
-    and returns none: a tuple of them cost reference counting at each particle."""
+    and returns none: a tuple of them would cost reference counting at each particle.
+
+    Parameters
+    ----------
+    w : float64 (3,)
+        The walker's centre at contact; wrapped onto a substrate's period.
+    parent : float
+        The row of ``pts`` it touched, -1 for the substrate (``normal[3]``).
+    count : int
+        Particles before this one: its row.
+    pending : int
+        Its steps since the last attachment, stored as its diffusion time.
+    pts : float64 (n, dim)
+        Receives its centre in row ``count``.
+    order : int32 (n,) or (0,)
+        Each row's attachment number where the rows are stored by cell; empty otherwise.
+    steps : uint32 (n,)
+        Receives its diffusion time.
+    parents : int32 (n,)
+        Receives its parent's attachment number.
+    nxt : int32 (n,)
+        The cell list's links through the rows.
+    geo : float64 (3,)
+        The cluster's r_max, Chebyshev extent and h_max, updated.
+    dim : int
+        2 or 3.
+    line : bool
+        Whether the seed is a substrate.
+    size : int
+        A substrate's period.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``); ``attach`` reads the extent
+        it covers and its count of tiles.
+    words : uint64 (...)
+        The dilated maps.
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout (``maps.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads (``celllist``).
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     up = dim - 1
     if line:
         for a in range(up):
@@ -416,7 +534,30 @@ def attach(w, parent, count, pending, pts, order, steps, parents, nxt, geo, dim,
 
 @jit
 def index_late(i, pts, nxt, dim, size, gi, gf, words, start, blocks, cells, dirr, heads, field):
-    """Put particle i, which found the heads full, in the grid; returns the larger heads."""
+    """Put particle i, which found the heads full, in the grid; returns the larger heads.
+
+    Parameters
+    ----------
+    i : int
+        The particle's row.
+    pts, nxt : float64 (n, dim), int32 (n,)
+        The centres and the cell list's links.
+    dim : int
+        2 or 3.
+    size : int
+        A substrate's period.
+    gi, gf : int64 (GI_SLOTS,), float64 (GF_SLOTS,)
+        The grid's geometry (``geometry.layout``); ``attach`` reads the extent
+        it covers and its count of tiles.
+    words : uint64 (...)
+        The dilated maps.
+    start, blocks, cells : int64 (S + 1,), int64 (S,), int64 (S,)
+        The maps' layout (``maps.layout``).
+    dirr, heads : int32 (...)
+        The cell list's directory of tiles and its heads (``celllist``).
+    field : uint8 (...)
+        The centre field with the centre pyramid above it.
+    """
     heads = more_heads(heads)
     insert(i, pts, nxt, dim, gi, gf, dirr, heads)
     mark(i, pts, dim, size, gi, words, start, blocks, cells, field)
