@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import dlasweep as dla
-from dlasweep import ragged, store
+from dlasweep.data import ragged, netcdf as store
 
 SPEC = """\
 name = "accessor"

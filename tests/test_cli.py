@@ -21,9 +21,10 @@ from hypothesis import strategies as st
 
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
-from dlasweep import cli, ragged, schema, store
-from dlasweep.parts import Parts
-from dlasweep.report import files as report_files
+from dlasweep import cli
+from dlasweep.data import ragged, schema, netcdf as store
+from dlasweep.sweep.parts import Parts
+from dlasweep.reporting.folder import files as report_files
 from dlasweep.params import PARAMETERS
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
@@ -138,7 +139,7 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
 @pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
 def test_n_is_any_integral_number(text, n, run_cli, tmp_path, monkeypatch):
     asked = []
-    module = importlib.import_module("dlasweep.grow")
+    module = importlib.import_module("dlasweep.growth.cluster")
     grow = module.grow
 
     def small(n, seed, **params):
@@ -302,7 +303,7 @@ def test_sweep_with_the_embedded_cluster_matches(run_cli, write_spec, tmp_path, 
 
 
 def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_cluster, monkeypatch):
-    from dlasweep import task as worker
+    from dlasweep.sweep import task as worker
 
     def broken(n, seed, **kwargs):
         raise MemoryError("no room")
@@ -448,7 +449,7 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled",
+    monkeypatch.setattr(importlib.import_module("dlasweep.growth.cluster"), "compiled",
                         lambda model, dim, walkers: model != "offlattice")
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")

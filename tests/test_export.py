@@ -1,4 +1,4 @@
-"""Exports of a cluster (``dlasweep.export``), read back by real readers: csv, plyfile and trimesh, xml."""
+"""Exports of a cluster (``dlasweep.data.export``), read back by real readers: csv, plyfile and trimesh, xml."""
 
 import csv
 import xml.etree.ElementTree as ET
@@ -9,7 +9,8 @@ import pytest
 import trimesh
 
 import dlasweep as dla
-from dlasweep import export, store, tree
+from dlasweep.data import export, netcdf as store
+from dlasweep.measures import tree
 
 CASES = {
     "off-2d": dict(model="offlattice"),
@@ -184,7 +185,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, tmp_pat
 def test_a_large_cluster_streams_without_a_copy_of_the_file_in_memory(tmp_path):
     import tracemalloc
 
-    from dlasweep.grow import Cluster
+    from dlasweep.growth.cluster import Cluster
     from dlasweep.params import resolve
 
     n = 1_000_000

@@ -129,7 +129,7 @@ def busy(argv):
 
 class Swallowing(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def find_spec(self, name, path, target=None):
-        return importlib.machinery.ModuleSpec(name, self) if name == "dlasweep.store" else None
+        return importlib.machinery.ModuleSpec(name, self) if name == "dlasweep.data.netcdf" else None
 
     def create_module(self, spec):
         return None
@@ -166,7 +166,7 @@ import os, signal, sys, time
 import numpy as np
 import netCDF4._netCDF4 as core
 import dlasweep as dla
-from dlasweep import export, schema, store
+from dlasweep.data import export, schema, netcdf as store
 
 signum = getattr(signal, sys.argv[1])
 if signum != signal.SIGINT:  # a handler such as ``dlasweep slurm``'s

@@ -8,7 +8,7 @@ from naive import seed_count
 from test_models import CASES
 
 import dlasweep as dla
-from dlasweep.grow import grow_many
+from dlasweep.growth.cluster import grow_many
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.parents import lattice_parents
 

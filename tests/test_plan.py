@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import TINY_SPEC
-from dlasweep import plan
-from dlasweep.schema import ragged_columns
-from dlasweep.spec import SpecError, parse_spec
+from dlasweep.sweep import plan
+from dlasweep.data.schema import ragged_columns
+from dlasweep.sweep.spec import SpecError, parse_spec
 
 GB = 10 ** 9
 LATTICE_2D_BYTES = sum(np.dtype(d).itemsize for d in ragged_columns(["lattice"], [2]).values())

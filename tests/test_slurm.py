@@ -1,4 +1,4 @@
-"""``dlasweep slurm`` (dlasweep/slurm.py): its options without SLURM, then on a real one-node SLURM
+"""``dlasweep slurm`` (dlasweep/sweep/slurm.py): its options without SLURM, then on a real one-node SLURM
 (workflows/slurm_local.py).
 
 The SLURM tests start the daemons once for the module (installing the packages
@@ -26,8 +26,8 @@ from conftest import ROOT, science
 from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 import dlasweep as dla
-from dlasweep import slurm as launcher
-from dlasweep.spec import load_spec, parse_spec
+from dlasweep.sweep import slurm as launcher
+from dlasweep.sweep.spec import load_spec, parse_spec
 
 
 def _workflow(name):

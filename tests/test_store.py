@@ -14,10 +14,11 @@ import xarray as xr
 from conftest import ROOT
 
 import dlasweep as dla
-from dlasweep import bench, ragged, schema, store
-from dlasweep.grow import Cluster
+from dlasweep.bench import benchmark as bench
+from dlasweep.data import ragged, schema, netcdf as store
+from dlasweep.growth.cluster import Cluster
 from dlasweep.params import PARAMETERS, resolve
-from dlasweep.spec import parse_spec
+from dlasweep.sweep.spec import parse_spec
 
 SPEC = """\
 name = "layout"
@@ -138,7 +139,7 @@ CHECKER_NOTE = "cluster_particles: attribute sample_dimension is being used in a
 
 
 def unexplained(path, messages) -> list:
-    """cfchecker's messages less those dlasweep.store explains (CF in its docstring): the checker's note on
+    """cfchecker's messages less those dlasweep.data.netcdf explains (CF in its docstring): the checker's note on
     the count variable, its notes on booleans' flags (coordinates, where CF-1.8 names none) and its warning
     on swept strings (coordinate variables of char, for xarray to select by)."""
     with netCDF4.Dataset(path) as nc:

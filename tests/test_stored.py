@@ -9,12 +9,13 @@ from conftest import TINY_SPEC
 from test_sweep import Interrupt, batches_of, interrupt_after
 
 import dlasweep as dla
-from dlasweep import branching, ragged, store
-from dlasweep.fit import fit_mass_radius, growth_counts
-from dlasweep.parts import Parts, ResumeError
-from dlasweep.measure import radius_of_gyration
-from dlasweep.report import report
-from dlasweep.spec import parse_spec
+from dlasweep.stats import branches as branching
+from dlasweep.data import ragged, netcdf as store
+from dlasweep.stats.fit import fit_mass_radius, growth_counts
+from dlasweep.sweep.parts import Parts, ResumeError
+from dlasweep.measures.shape import radius_of_gyration
+from dlasweep.reporting.folder import report
+from dlasweep.sweep.spec import parse_spec
 
 PER_PARTICLE = ("x", "y", "diffusion_time", "parent", "cluster_particles")
 """The variables of the stored clusters; everything else is measured for every cluster."""

@@ -1,15 +1,15 @@
-"""The worker's task (dlasweep/task.py): a batch is what growing and measuring each cluster alone gives, and a
+"""The worker's task (dlasweep/sweep/task.py): a batch is what growing and measuring each cluster alone gives, and a
 failure stays with its own cluster."""
 
 import numpy as np
 
 import dlasweep as dla
 from conftest import TINY_SPEC
-from dlasweep import measure
-from dlasweep import task as worker
-from dlasweep.fit import growth_counts
+from dlasweep.measures import shape as measure
+from dlasweep.sweep import task as worker
+from dlasweep.stats.fit import growth_counts
 from dlasweep.params import Status
-from dlasweep.spec import parse_spec
+from dlasweep.sweep.spec import parse_spec
 
 
 def tiny():

@@ -1,4 +1,4 @@
-"""Branch statistics of trees whose answers are known (``dlasweep.tree``)."""
+"""Branch statistics of trees whose answers are known (``dlasweep.measures.tree``)."""
 
 import sys
 import time
@@ -6,7 +6,7 @@ import time
 import numpy as np
 import pytest
 
-from dlasweep import tree
+from dlasweep.measures import tree
 
 
 def complete_binary(depth):

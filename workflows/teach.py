@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import dlasweep as dla
-from dlasweep.pictures import draw_cluster
+from dlasweep.reporting.pictures import draw_cluster
 
 MODELS = {"lattice": "square lattice", "offlattice": "disks, off the lattice"}
 
