@@ -21,16 +21,16 @@ import traceback
 import warnings
 from pathlib import Path
 
-from .data import export as _export
 from . import params as _params
-from .sweep import slurm
 from ._entry import command_of, loading
 from ._version import __version__
 from .bench.targets import MODELS as BENCH_MODELS
-from .params import one_line as _one_line
-from .sweep.parts import Interrupted, ResumeError
+from .data import export as _export
 from .data.paths import writable
+from .params import one_line as _one_line
 from .reporting.pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
+from .sweep import slurm
+from .sweep.parts import Interrupted, ResumeError
 from .sweep.progress import follow, growth_bar, steps_bar
 from .sweep.spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 
@@ -204,7 +204,7 @@ def _output(args, out) -> dict:
 
 
 def _export_cluster(args) -> int:
-    from .data import ragged, netcdf
+    from .data import netcdf, ragged
 
     out = args.output
     how = _output(args, out)
@@ -395,8 +395,8 @@ def _slurm(args) -> int:
 
 def _report(args) -> int:
     from .data import netcdf
-    from .reporting.folder import ReportFolderError, earlier_report, report
     from .data.schema import is_sweep
+    from .reporting.folder import ReportFolderError, earlier_report, report
 
     _check_dataset(args.dataset)
     outdir = args.output or args.dataset.with_suffix("")
@@ -420,8 +420,8 @@ def _report(args) -> int:
 
 def _info(args) -> int:
     """Print what a dataset holds, in the project's words (``ncdump -h`` gives the raw header)."""
-    from .reporting import info
     from .data import netcdf
+    from .reporting import info
 
     _check_dataset(args.dataset)
     ds = netcdf.open_dataset(args.dataset)
@@ -436,9 +436,9 @@ def _info(args) -> int:
 
 
 def _bench(args) -> int:
-    from .data import netcdf
     from .bench.benchmark import analysis_bench, run_bench
     from .bench.chart import plot_bench
+    from .data import netcdf
 
     out = args.output
     _check_writable(out, folder=True)

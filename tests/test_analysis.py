@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import dlasweep as dla
-from dlasweep.stats.fit import fit_mass_radius, mass_radius_counts
 from dlasweep.measures.shape import radius_of_gyration
+from dlasweep.stats.fit import fit_mass_radius, mass_radius_counts
 from dlasweep.sweep.spec import parse_spec
 from test_report import synthetic_sweep
 
@@ -167,7 +167,8 @@ def test_intervals_hold_95_percent_from_the_fewest_seeds_that_give_one():
     counts = mass_radius_counts(10_000)
     below = _known_histories(np.random.default_rng(0), MIN_CI_SEEDS - 1, counts)
     fit, lo, hi, why = _headline(below, counts, np.random.default_rng(0), 400)
-    assert np.isfinite(fit.D) and np.isnan(lo) and np.isnan(hi) and f"fewer than the {MIN_CI_SEEDS} a 95% CI needs" in why
+    assert np.isfinite(fit.D) and np.isnan(lo) and np.isnan(hi)
+    assert f"fewer than the {MIN_CI_SEEDS} a 95% CI needs" in why
 
 
 def test_a_percentile_bootstrap_over_few_seeds_would_not_cover(monkeypatch):
@@ -175,7 +176,8 @@ def test_a_percentile_bootstrap_over_few_seeds_would_not_cover(monkeypatch):
     # bootstrap over 4 seeds covers far less than 95% (0.78 in 600 ensembles).
     from dlasweep.stats import summary as analysis
 
-    monkeypatch.setattr(analysis, "seed_interval", lambda estimate, replicates, n: np.percentile(replicates, [2.5, 97.5]))
+    monkeypatch.setattr(analysis, "seed_interval",
+                        lambda estimate, replicates, n: np.percentile(replicates, [2.5, 97.5]))
     covered, given = _coverage(4)
     assert given == 300 and covered < 0.85, covered
 
@@ -194,8 +196,8 @@ def test_time_depth_pairs_equal_np_unique_of_every_particles_key(sites):
     # The diffusion-time table of one cluster without a key per particle: a table of counts for the
     # times its size bounds, the rarer longer ones (here a tenth, up to 1e6 steps) counted apart. Against
     # the array computation it replaced: keys time * bins + depth bin, np.unique.
-    from dlasweep.stats.summary import DEPTH_EDGES
     from dlasweep.measures.shape import time_depth_pairs
+    from dlasweep.stats.summary import DEPTH_EDGES
 
     rng = np.random.default_rng(11)
     n = 5000

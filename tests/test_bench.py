@@ -61,8 +61,8 @@ def test_target_table_compares_each_figure_with_its_target():
     rows.append({"model": "offlattice-3d", "method": "exact", "n": 10**7, "seconds": 250.0, "n_grown": 10**7,
                  "steps": 10**9, "status": "ok", "peak_mb": 500.0, "added_mb": 300.0})
     lines = target_table(_to_dataset(rows))
-    assert lines[0] == ("| model | 1e7 s | 1e8 s | bytes/particle at 1e7 | bytes/particle at 1e8 | cost exponent 1e5 to 1e7 "
-                        "| steps/particle 1e7 over 1e5 |")
+    assert lines[0] == ("| model | 1e7 s | 1e8 s | bytes/particle at 1e7 | bytes/particle at 1e8 "
+                        "| cost exponent 1e5 to 1e7 | steps/particle 1e7 over 1e5 |")
     table = {line.split(" | ")[0].strip("| "): [c.strip(" |") for c in line.split(" | ")] for line in lines[2:]}
     lattice = table["lattice-2d"]
     assert lattice[1] == "502.4 (<= 60: 737% over)"
@@ -138,7 +138,8 @@ def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
 def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeypatch):
     # every probe a little slower than the one before (a host that slows down): 1e5's six runs,
     # three before 1e7 and three after, span the drift, and the median is one of them
-    from dlasweep.bench import benchmark as bench, targets as bench_targets
+    from dlasweep.bench import benchmark as bench
+    from dlasweep.bench import targets as bench_targets
 
     calls = []
 

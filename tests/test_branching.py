@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
-from test_report import ALWAYS, synthetic_sweep
 
 import dlasweep as dla
-from dlasweep.stats import branches as branching
 from dlasweep.measures import tree
-from dlasweep.stats.fit import ensemble
 from dlasweep.reporting.folder import report
+from dlasweep.stats import branches as branching
+from dlasweep.stats.fit import ensemble
+from test_report import ALWAYS, synthetic_sweep
 
 
 @pytest.fixture(scope="module")

@@ -22,10 +22,11 @@ from hypothesis import strategies as st
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
 from dlasweep import cli
-from dlasweep.data import ragged, schema, netcdf as store
-from dlasweep.sweep.parts import Parts
-from dlasweep.reporting.folder import files as report_files
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
 from dlasweep.params import PARAMETERS
+from dlasweep.reporting.folder import files as report_files
+from dlasweep.sweep.parts import Parts
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
 
@@ -87,7 +88,8 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     monkeypatch.chdir(tmp_path)
     (tmp_path / "spec.toml").write_text(TINY_SPEC)
     (tmp_path / "bad.toml").write_text(BAD_SPEC)
-    (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345", 'root_seed = 1\nstore_clusters = "few"'))
+    (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345",
+                                                           'root_seed = 1\nstore_clusters = "few"'))
     (tmp_path / "huge.toml").write_text(TINY_SPEC.replace("seeds = 3", "seeds = 100000000000"))
     (tmp_path / "heavy.toml").write_text("[grid]\nn_particles = 1e8\nseeds = 64\n[model]\ndim = 3\n[run]\n"
                                          "workers = 64\n")  # 64 clusters of 10^8 in 3D at once
@@ -131,7 +133,8 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
     assert "model parameter" not in text
     for name, param in PARAMETERS.items():
         assert f"--{name.replace('_', '-')}" in text and " ".join(param.meaning.split()) in text, name
-    for name, values in {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}.items():
+    choices = {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}
+    for name, values in choices.items():
         assert f"--{name.replace('_', '-')} {{{values}}}" in text
     assert "Default: 2*dim." in text and "Allowed: [0.0001, 1]." in text
 

@@ -1,9 +1,9 @@
-"""The statistical constants are stated once, in dlasweep/stats/constants.py: the words say the confidence level from it."""
+"""The statistical constants are stated once, in dlasweep/stats/constants.py: the words say the confidence level
+from it."""
 
 import ast
 
 from conftest import ROOT
-
 from dlasweep.stats.constants import CONFIDENCE, LEVEL
 
 

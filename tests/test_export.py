@@ -9,7 +9,8 @@ import pytest
 import trimesh
 
 import dlasweep as dla
-from dlasweep.data import export, netcdf as store
+from dlasweep.data import export
+from dlasweep.data import netcdf as store
 from dlasweep.measures import tree
 
 CASES = {
@@ -100,7 +101,8 @@ def test_svg_tree_is_one_polyline_per_branch_and_covers_every_bond(cluster, tmp_
         np.testing.assert_array_equal(counts, tree.branch_counts(cluster.parents))
     drawn = {tuple(np.r_[a, b]) for _, xy in lines for a, b in zip(xy[:-1], xy[1:])}
     child = np.flatnonzero(cluster.parents >= 0)
-    bonds = {tuple(float(f"{v:.3f}") for v in np.r_[points[p], points[c]]) for c, p in zip(child, cluster.parents[child])}
+    bonds = {tuple(float(f"{v:.3f}") for v in np.r_[points[p], points[c]])
+             for c, p in zip(child, cluster.parents[child])}
     wrapped = {b for b in bonds if abs(b[0] - b[2]) > 1.5}  # across a periodic side: not drawn as one segment
     assert drawn == bonds - wrapped
 

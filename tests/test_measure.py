@@ -7,10 +7,12 @@ import pytest
 
 import dlasweep
 import naive
-from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
-from dlasweep.measures import bitmaps as box_bitmaps, boxes, shape as measure
+from dlasweep.measures import bitmaps as box_bitmaps
+from dlasweep.measures import boxes
+from dlasweep.measures import shape as measure
 from dlasweep.measures.boxes import box_counts, default_scales
 from dlasweep.measures.shape import max_radius, radius_of_gyration
+from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
 
 
 def random_set(dim, lattice, n, width, seed):
@@ -472,8 +474,8 @@ def test_anisotropy_of_an_isotropic_cloud_is_zero(dim):
 @pytest.mark.slow
 def test_square_lattice_clusters_grow_along_the_axes_and_continuum_ones_do_not():
     import dlasweep as dla
-    from dlasweep.stats.fit import ensemble
     from dlasweep.measures.shape import anisotropy
+    from dlasweep.stats.fit import ensemble
 
     lattice = ensemble([anisotropy(dla.grow(n=30_000, seed=s).points, [30_000])[0] for s in range(6)])
     continuum = ensemble([anisotropy(dla.grow(n=10_000, seed=s, model="offlattice").points, [10_000])[0]

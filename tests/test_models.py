@@ -7,11 +7,11 @@ import sys
 import threading
 import time
 
-import naive
 import numpy as np
 import pytest
 
 import dlasweep as dla
+import naive
 from dlasweep.params import DEFAULTS
 
 N = 600

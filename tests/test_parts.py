@@ -54,7 +54,8 @@ def test_a_part_cut_short_by_a_full_disk_leaves_no_temporary_file(tmp_path, dask
 @contextlib.contextmanager
 def locked_by_another_process(folder):
     """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""
-    code = "import sys, pathlib, dlasweep.sweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
+    code = ("import sys, pathlib, dlasweep.sweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); "
+            "input()")
     holder = subprocess.Popen([sys.executable, "-c", code, str(folder)], stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE)
     try:
@@ -133,7 +134,8 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
     parts = Parts(tmp_path)
     monkeypatch.setattr(Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
     for batch in (tasks[:3], tasks[3:4], tasks[4:]):
-        parts.write({t.key: r for t, r in zip(batch, worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
+        results = worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch))
+        parts.write({t.key: r for t, r in zip(batch, results)})
         if kept == 1:  # both budgets spent
             parts._kept_bytes = dict.fromkeys(parts._kept_bytes, Parts.KEEP_BYTES)
     assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())

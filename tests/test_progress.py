@@ -1,4 +1,5 @@
-"""A sweep's progress lines for a log (dlasweep/sweep/progress.py); the terminal's bars are tested through the command."""
+"""A sweep's progress lines for a log (dlasweep/sweep/progress.py); the terminal's bars are tested through the
+command."""
 
 import io
 

@@ -12,13 +12,13 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import colours_shown
+from dlasweep.data import schema
 from dlasweep.measures.boxes import box_counts, default_scales
 from dlasweep.measures.shape import anisotropy, max_radius, radius_of_gyration
-from dlasweep.data import schema
-from dlasweep.stats.constants import MIN_CI_SEEDS
-from dlasweep.reporting.readout import Readout
 from dlasweep.params import STATUSES
 from dlasweep.reporting.folder import report
+from dlasweep.reporting.readout import Readout
+from dlasweep.stats.constants import MIN_CI_SEEDS
 
 
 def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=False):
@@ -80,8 +80,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
     return ds
 
 
-ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "box_local_slopes.png", "mass_radius.png", "anisotropy.png",
-          "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "box_local_slopes.png",
+          "mass_radius.png", "anisotropy.png", "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
 
 
 def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
@@ -135,9 +135,11 @@ def test_report_tells_its_progress_step_by_step(tmp_path):
     report(synthetic_sweep({"stickiness": [1.0, 0.5]}), tmp_path / "out",
            progress=lambda done, steps, name: calls.append((done, steps, name)))
     plots = [name for _, _, name in calls[2:-2]]
-    assert [done for done, _, _ in calls] == list(range(len(calls))) and {steps for _, steps, _ in calls} == {len(calls) - 1}
+    assert [done for done, _, _ in calls] == list(range(len(calls)))
+    assert {steps for _, steps, _ in calls} == {len(calls) - 1}
     assert [name for _, _, name in calls[:2]] == ["summary", "tables"] and calls[-2][2] == "report.md"
-    assert calls[-1][2] == "" and {f"{name}.png" for name in plots} >= ALWAYS - {"summary.csv", "summary.md", "report.md"}
+    assert calls[-1][2] == ""
+    assert {f"{name}.png" for name in plots} >= ALWAYS - {"summary.csv", "summary.md", "report.md"}
 
 
 def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
@@ -325,6 +327,6 @@ def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
     assert value == two["D"] - one["D"] and 0 < half < abs(value) + 1
     assert half == pytest.approx(np.hypot(one["D_ci_hi"] - one["D_ci_lo"], two["D_ci_hi"] - two["D_ci_lo"]) / 2)
     report(ds, tmp_path)
-    line = next(l for l in (tmp_path / "report.md").read_text().splitlines()
-                if l.startswith("- stickiness=0.1 against stickiness=1.0: "))
+    line = next(text for text in (tmp_path / "report.md").read_text().splitlines()
+                if text.startswith("- stickiness=0.1 against stickiness=1.0: "))
     assert line.endswith("(resolved)") == (abs(value) > half) and ("|dev| <" in line) == (abs(value) <= half)

@@ -22,12 +22,12 @@ from pathlib import Path
 
 import pytest
 import xarray as xr
-from conftest import ROOT, science
-from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 import dlasweep as dla
+from conftest import ROOT, science
 from dlasweep.sweep import slurm as launcher
 from dlasweep.sweep.spec import load_spec, parse_spec
+from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 
 def _workflow(name):

@@ -1,4 +1,5 @@
-"""The netCDF layer: one round trip of the dataset layout (README, "The dataset"), CF compliance, atomic writes, bad files."""
+"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (README, "The dataset"), CF
+compliance, atomic writes, bad files."""
 
 import os
 import re
@@ -11,11 +12,12 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import ROOT
 
 import dlasweep as dla
+from conftest import ROOT
 from dlasweep.bench import benchmark as bench
-from dlasweep.data import ragged, schema, netcdf as store
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
 from dlasweep.growth.cluster import Cluster
 from dlasweep.params import PARAMETERS, resolve
 from dlasweep.sweep.spec import parse_spec
@@ -220,7 +222,8 @@ def test_clusters_are_a_cf_ragged_array_of_trajectories(saved, tmp_path):
         roles = {name: var.cf_role for name, var in nc.variables.items() if "cf_role" in var.ncattrs()}
         assert roles == {"cluster": "trajectory_id"} and nc["cluster"].dimensions == ("cluster",)
         np.testing.assert_array_equal(nc["cluster"][:], np.arange(nc.dimensions["cluster"].size))
-        assert nc["diffusion_time"].coordinates == nc["parent"].coordinates == "x y" and (nc["x"].axis, nc["y"].axis) == ("X", "Y")
+        assert nc["diffusion_time"].coordinates == nc["parent"].coordinates == "x y"
+        assert (nc["x"].axis, nc["y"].axis) == ("X", "Y")
         # No attribute but CF's: xarray's own marker of booleans ("dtype") is gone.
         assert [name for name, var in nc.variables.items() if "dtype" in var.ncattrs()] == []
         assert nc["jumps"].dtype == np.int8 and nc["jumps"].flag_meanings == "false true"

@@ -1,8 +1,8 @@
 """Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
 
 import contextlib
-import functools
 import errno
+import functools
 import gc
 import json
 import os
@@ -21,9 +21,12 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, Interrupt, files_under, finished_clusters, interrupt_after, progress_lines, science
-from dlasweep.measures import boxes, shape as measure
-from dlasweep.sweep import progress, runner as sweep, session
-from dlasweep.data import ragged, schema, netcdf as store
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
+from dlasweep.measures import boxes
+from dlasweep.measures import shape as measure
+from dlasweep.sweep import progress, session
+from dlasweep.sweep import runner as sweep
 from dlasweep.sweep import task as worker
 from dlasweep.sweep.parts import Parts, ResumeError
 from dlasweep.sweep.spec import parse_spec
@@ -75,7 +78,8 @@ def record_writes(monkeypatch):
 
 def batches_of(monkeypatch, size):
     """Make every dask task a batch of ``size`` clusters (the last one: what is left)."""
-    monkeypatch.setattr(sweep, "_batches", lambda todo, _, threads: (todo[i:i + size] for i in range(0, len(todo), size)))
+    monkeypatch.setattr(sweep, "_batches",
+                        lambda todo, _, threads: (todo[i:i + size] for i in range(0, len(todo), size)))
 
 
 def test_the_batch_size_follows_the_counts():
@@ -331,7 +335,8 @@ def test_a_spec_of_lockstep_walkers_compiles_when_only_one_walkers_kernel_is_cac
 
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
     spec = parse_spec(TINY_SPEC)
-    code = "import sys, dlasweep.sweep.runner as s, dlasweep.sweep.spec as p; print(s._compiles(p.parse_spec(sys.argv[1])))"
+    code = ("import sys, dlasweep.sweep.runner as s, dlasweep.sweep.spec as p; "
+            "print(s._compiles(p.parse_spec(sys.argv[1])))")
     cold = subprocess.run([sys.executable, "-c", code, TINY_SPEC], capture_output=True, text=True, check=True,
                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     dla.grow(20, 0, model="lattice")  # compiles into the cache, if it is not there yet

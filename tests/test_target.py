@@ -8,8 +8,8 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import science
-from dlasweep.sweep import precision
 from dlasweep.stats.summary import summarise
+from dlasweep.sweep import precision
 from dlasweep.sweep.spec import DEFAULT_MAX_SEEDS, SpecError, parse_spec
 from test_sweep import Interrupt, interrupt_after, record_writes
 

@@ -32,8 +32,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from dlasweep.bench.targets import MODELS, SCALING, TARGETS
 from dlasweep.bench.host import latency_line, read_latency
+from dlasweep.bench.targets import MODELS, SCALING, TARGETS
 
 _SIDE = """
 import json, os, sys, time

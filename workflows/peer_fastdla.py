@@ -59,7 +59,8 @@ def build(checkout: Path, into: Path) -> Path:
 def version(checkout: Path) -> str:
     """The checkout's git commit, else a hash of its two source files."""
     try:
-        out = subprocess.run(["git", "-C", str(checkout), "rev-parse", "HEAD"], check=False, capture_output=True, text=True)
+        out = subprocess.run(["git", "-C", str(checkout), "rev-parse", "HEAD"], check=False, capture_output=True,
+                             text=True)
         if out.returncode == 0:
             return "commit " + out.stdout.strip()
     except OSError:

@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 import dlasweep as dla
-from dlasweep.data import ragged, netcdf as store
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged
 from dlasweep.sweep.spec import parse_spec
 
 

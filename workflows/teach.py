@@ -45,7 +45,8 @@ D_2D = 1.708
 
 
 def checked(n, seed, output) -> Path:
-    """The output folder, created, once ``n`` and ``seed`` are found fit for the lesson; ValueError naming what is not."""
+    """The output folder, created, once ``n`` and ``seed`` are found fit for the lesson; ValueError naming
+    what is not."""
     if not 2_000 <= n <= 1_000_000:
         raise ValueError(f"-n: {n} is not in [2000, 1000000] (fewer leave no decade to fit)")
     if seed < 0:

@@ -20,9 +20,19 @@ import numpy as np
 import xarray as xr
 
 from ..data import netcdf
-from .targets import ( MODELS, SCALING, cost_exponent, cost_exponent_range, exponent_attribute, exponent_parts, power_label, target_table, verdict, )
-from .host import MEMORY_SET, READS, RUN_SET, latency_line, read_latency, shared_cache
 from ..data.schema import Variable
+from .host import MEMORY_SET, READS, RUN_SET, latency_line, read_latency, shared_cache
+from .targets import (
+    MODELS,
+    SCALING,
+    cost_exponent,
+    cost_exponent_range,
+    exponent_attribute,
+    exponent_parts,
+    power_label,
+    target_table,
+    verdict,
+)
 
 MIB = "2^20 byte"
 """The units of memory sizes (MiB, which udunits does not know)."""
@@ -369,8 +379,9 @@ def sweep_ratios(echo=print, sweeps=SWEEPS, threads: int = SWEEP_THREADS) -> dic
             name = f"{seeds}x{'_'.join(map(str, counts))}"
             eff = sweep_efficiency(sweep_spec(seeds, counts), Path(scratch) / f"{name}.nc", threads)
             figures.update({f"sweep_{name}_{key}": value for key, value in eff.items()})
-            echo(f"  {seeds:>5} x {counts!s:<16} process {eff['process']:6.2f} s, kernels {eff['kernels']:6.2f} s, ideal "
-                 f"{eff['ideal']:6.2f} s: ratio {eff['ratio']:4.2f}; target {eff['target']:6.2f} s "
+            echo(f"  {seeds:>5} x {counts!s:<16} process {eff['process']:6.2f} s, "
+                 f"kernels {eff['kernels']:6.2f} s, ideal {eff['ideal']:6.2f} s: ratio {eff['ratio']:4.2f}; "
+                 f"target {eff['target']:6.2f} s "
                  + shortfall(eff["process"], eff["target"]))
     return figures
 
@@ -422,11 +433,11 @@ def analysis_bench(echo=print) -> dict:
     import tempfile
     import time
 
+    from ..data.netcdf import open_sweep
     from ..measures.boxes import box_counts
-    from ..stats.fit import fit_dimension, fit_mass_radius
     from ..measures.shape import radius_of_gyration
     from ..reporting.folder import report
-    from ..data.netcdf import open_sweep
+    from ..stats.fit import fit_dimension, fit_mass_radius
 
     seconds = {}
     for model in ("lattice", "offlattice"):

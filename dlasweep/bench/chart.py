@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .targets import SCALING, exponent_attribute, power_label
-from ..reporting.figures import colour_of, new_figure, save_figure
 from ..data.schema import plain
+from ..reporting.figures import colour_of, new_figure, save_figure
+from .targets import SCALING, exponent_attribute, power_label
 
 
 def plot_bench(ds, outdir) -> Path:

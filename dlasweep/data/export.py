@@ -316,8 +316,8 @@ def _svg(cluster, f, mesh):
     current = 0
     for k, path in branch_polylines(cluster):
         if k != current:
-            f.write(((b"</g>\n" if current else b"") + f'<g stroke-width="{STROKE * k:g}" class="order-{k}">\n'
-                     .encode()))
+            f.write((b"</g>\n" if current else b"") + f'<g stroke-width="{STROKE * k:g}" class="order-{k}">\n'
+                     .encode())
             current = k
         xy = " ".join(f"{x},{y}" if exact else f"{x:.3f},{y:.3f}" for x, y in path.tolist())
         f.write(f'<polyline points="{xy}"/>\n'.encode())

@@ -23,7 +23,18 @@ from .. import params as _params
 from .._version import __version__
 from ..params import one_line
 from .paths import writable
-from .schema import (AXES, BOOLEAN, SCHEMA, SCIENCE, STATUS_FLAGS, StoreError, attributes, dims, ragged_columns, ragged_dtype)
+from .schema import (
+    AXES,
+    BOOLEAN,
+    SCHEMA,
+    SCIENCE,
+    STATUS_FLAGS,
+    StoreError,
+    attributes,
+    dims,
+    ragged_columns,
+    ragged_dtype,
+)
 
 
 def to_dataset(spec, tasks, scales, history, science, cluster_particles, failed=()) -> xr.Dataset:
@@ -466,7 +477,8 @@ def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
 
 
 def _booleans(ds: xr.Dataset) -> xr.Dataset:
-    """Turn ``ds``'s booleans (int8 flags ``BOOLEAN`` in the file) back into bool, in place: it still closes its file."""
+    """Turn ``ds``'s booleans (int8 flags ``BOOLEAN`` in the file) back into bool, in place: it still closes its
+    file."""
     for name, var in list(ds.variables.items()):
         if var.attrs.get("flag_meanings") == BOOLEAN and var.dtype != bool:
             (ds.coords if name in ds.coords else ds)[name] = var.astype(bool)
@@ -496,4 +508,4 @@ def provenance(function) -> str:
 
 
 def _now() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")

@@ -65,8 +65,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import params as _params
-from ..stats.constants import LEVEL
 from ..kernels.model import STEPS_DTYPE
+from ..stats.constants import LEVEL
 
 STATUS_FLAGS = _params.STATUSES
 """Meaning of each integer code of ``status``."""
@@ -195,7 +195,8 @@ def ragged_dtype(lattice: bool):
 
 
 def ragged_columns(models, dims) -> dict:
-    """The per-particle variables of clusters of these models and dims, and their types: positions, diffusion times, parents.
+    """The per-particle variables of clusters of these models and dims, and their types: positions, diffusion
+    times, parents.
 
     Lattice positions are int32 sites, off-lattice ones float64 (and float64
     for all when both are swept); with ``dim`` swept, 2D clusters lie in the
@@ -223,7 +224,7 @@ def attributes(name, dtype=None, schema=None) -> dict:
     attrs = {"long_name": long_name, **({"units": var.units} if var.units else {}), **var.cf}
     if name == "status":
         attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
-    elif dtype == bool:
+    elif dtype is bool:
         attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings=BOOLEAN)
     return attrs
 

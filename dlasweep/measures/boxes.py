@@ -15,7 +15,16 @@ import functools
 import numpy as np
 
 from .._jit import jit
-from .bitmaps import ( HALF, coarsen, least_count, mark_boxes, mark_sites, nth_piece, ordered, pieces, )
+from .bitmaps import (
+    HALF,
+    coarsen,
+    least_count,
+    mark_boxes,
+    mark_sites,
+    nth_piece,
+    ordered,
+    pieces,
+)
 
 
 def default_scales(max_extent: float, per_octave: int = 4) -> np.ndarray:
@@ -347,8 +356,8 @@ def _grids_within(cap, shape):
 
 
 @jit
-def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words, piece,
-                   counts, routes):
+def _prefix_counts(points, ends, integer, radius, sides, own, n_own, order, parent, part, shift, cap, strip_words,
+                   piece, counts, routes):
     """``counts[c]``: the counts of ``points[:ends[c]]``, and ``routes[c]`` how each side was counted.
 
     ``counts`` comes filled with ones (the sides a prefix fits in); a side

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..measures.tree import MIN_BRANCHES
 from ..stats.branches import ratio_line
 from ..stats.constants import LEVEL
 from .figures import colour_of, new_figure, save_figure
-from ..measures.tree import MIN_BRANCHES
 
 LITERATURE = {2: "5.2 in simulations and 4.9 from the branched-growth model (both quoted by Halsey 1997)"}
 """Published bifurcation ratios of DLA, by dimension (falling towards 3.1 in high dimension)."""

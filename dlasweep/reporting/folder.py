@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .readout import Readout
 from .plots import PLOTS
+from .readout import Readout
 from .text import write_csv, write_report, write_table
 
 TABLES = ("summary.csv", "summary.md")

@@ -9,13 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from .. import params
-from ..data import ragged, schema
-from ..stats.summary import summarise
+from ..bench.host import latency_line
 from ..bench.targets import exponent_attribute
+from ..data import ragged, schema
+from ..measures.shape import radius_of_gyration
 from ..stats.constants import LEVEL
 from ..stats.fit import fit_mass_radius
-from ..bench.host import latency_line
-from ..measures.shape import radius_of_gyration
+from ..stats.summary import summarise
 
 
 def lines(ds) -> list:

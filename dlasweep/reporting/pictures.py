@@ -193,7 +193,8 @@ def _site_image(ax, sites, view, low, span, pixels):
     shows = np.full(cells * cells, -1, np.int64)  # each pixel's largest rank: nearness, then attachment order
     for start in range(0, n, SITE_CHUNK):
         chunk = sites[start:start + SITE_CHUNK]
-        flat = ((chunk[:, v] - low[1]) // block).astype(np.int64) * cells + ((chunk[:, h] - low[0]) // block).astype(np.int64)
+        flat = (((chunk[:, v] - low[1]) // block).astype(np.int64) * cells
+                + ((chunk[:, h] - low[0]) // block).astype(np.int64))
         rank = np.arange(start, start + len(chunk), dtype=np.int64)
         if dim == 3:
             rank += (towards * chunk[:, depth].astype(np.int64) - far) * n

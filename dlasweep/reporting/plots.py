@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..stats.constants import LEVEL, MIN_CI_SEEDS
-from .figures import MAX_PANELS, colour_of, log_x, mark_missing, new_figure, save_figure
-from ..params import EXACT_METHOD, text
-from .pictures import draw_points
 from ..data.ragged import cluster_points
-from .readout import bias, error_bars, fitted_line, fitted_scales, visible_scales
+from ..params import EXACT_METHOD, text
+from ..stats.constants import LEVEL, MIN_CI_SEEDS
 from .branch_report import branching_figure
+from .figures import MAX_PANELS, colour_of, log_x, mark_missing, new_figure, save_figure
+from .pictures import draw_points
+from .readout import bias, error_bars, fitted_line, fitted_scales, visible_scales
 
 ESTIMATORS = (("D", "mass-radius, ensemble (headline)"), ("D_box", "box counting, per cluster (reads low)"))
 
@@ -228,7 +228,8 @@ def _dimension_spread(sweep, path):
         row = sweep.row(config, last)
         ax.errorbar([c - 0.2], [row["D"]], yerr=np.reshape(error_bars(row["D"], row["D_ci_lo"], row["D_ci_hi"]),
                                                           (2, 1)), color="k",
-                    capsize=3, marker="_", ms=14, label=("ensemble D" + (f", {LEVEL} CI" if ci else "")) if c == 0 else None)
+                    capsize=3, marker="_", ms=14,
+                    label=("ensemble D" + (f", {LEVEL} CI" if ci else "")) if c == 0 else None)
     if sweep.reference:
         ax.axhline(sweep.reference, color="k", ls="--", lw=1)
     ax.set_xticks(range(len(shown)), [sweep.label(c) for c in shown], rotation=30, ha="right", fontsize=7)

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..stats.summary import summarise, sweep_checked
-from ..stats.exact import exact_reference, method_axes
-from ..params import EXACT_METHOD, PARAMETERS, SHORTCUTS, Status
 from ..data.schema import config_dims, plain
 from ..data.selection import with_selected_clusters
+from ..params import EXACT_METHOD, PARAMETERS, SHORTCUTS, Status
+from ..stats.exact import exact_reference, method_axes
+from ..stats.summary import summarise, sweep_checked
 
 REFERENCE_D = {2: 1.7100, 3: 2.50}
 """D of DLA: 2D off-lattice 1.7100(3) (Menshutin et al. 2008); 3D about 2.50."""

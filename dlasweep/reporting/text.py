@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..stats.constants import LEVEL, MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
-from .figures import MAX_PANELS
 from ..params import EXACT_METHOD, text
-from .readout import REFERENCE_D, resolved
+from ..stats.constants import LEVEL, MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
 from .branch_report import branching_lines
+from .figures import MAX_PANELS
+from .readout import REFERENCE_D, resolved
 
 
 def _stored(sweep) -> str:
@@ -120,9 +120,9 @@ def _deviation_table(sweep) -> list:
     rows = [sweep.row(c, last) for c in sweep.configs]
     if not methods or not any(np.isfinite(r["rg_mean_vs_exact"]) for r in rows):
         return []
-    lines = [f"Each variant against the exact method ({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}) with "
-             f"the other parameters equal, at N = {sweep.counts[last]}: the difference ± its {LEVEL} CI half-width; "
-             "resolved when the interval excludes zero, otherwise bounded.", "",
+    lines = [f"Each variant against the exact method ({', '.join(f'{m}={text(EXACT_METHOD[m])}' for m in methods)}) "
+             f"with the other parameters equal, at N = {sweep.counts[last]}: the difference ± its {LEVEL} CI "
+             "half-width; resolved when the interval excludes zero, otherwise bounded.", "",
              "| " + " | ".join([*sweep.config_dims, "D - D(exact)", "Rg / Rg(exact) - 1",
                                 "Rg/Rmax - exact"]) + " |", "|" + "---|" * (len(sweep.config_dims) + 3)]
     for config, r in zip(sweep.configs, rows):

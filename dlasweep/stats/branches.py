@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .constants import LEVEL
-from .fit import ensemble
 from ..data.ragged import cluster_parents
 from ..measures.tree import MIN_BRANCHES, branching
+from .constants import LEVEL
+from .fit import ensemble
 
 ATTRS = {
     "bifurcation_ratio": "Horton-Strahler bifurcation ratio R_b = N_k / N_(k+1), mean over the stored clusters of "

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..params import EXACT_METHOD
 from ..data.schema import config_dims, plain
+from ..params import EXACT_METHOD
 
 COMPARED = {"D": False, "rg_mean": True, "rg_over_rmax": False}
 """Quantities compared with the exact method at equal N: name -> relative (ratio - 1) or difference."""

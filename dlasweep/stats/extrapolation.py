@@ -69,4 +69,5 @@ def extrapolate(centres, local, band, n_seeds) -> dict:
     lo, hi = seed_interval(coef[0], values, n_seeds)
     if (hi - lo) / 2 > MAX_INF_HALF_WIDTH:
         return {"D_inf_reason": f"extrapolation too uncertain ({LEVEL} CI half-width {(hi - lo) / 2:.3f})"}
-    return {"D_inf": coef[0], "D_inf_ci_lo": lo, "D_inf_ci_hi": hi, "D_inf_exponent": w, "D_inf_range_lo": centres[start]}
+    return {"D_inf": coef[0], "D_inf_ci_lo": lo, "D_inf_ci_hi": hi, "D_inf_exponent": w,
+            "D_inf_range_lo": centres[start]}

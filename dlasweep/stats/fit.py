@@ -20,7 +20,7 @@ reason) instead of returning a confident number.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from math import lgamma, log, pi
 from statistics import NormalDist
 
@@ -32,7 +32,7 @@ Z95 = NormalDist().inv_cdf((1 + CONFIDENCE) / 2)
 """Two-sided ``CONFIDENCE`` quantile of the standard normal (1.96): every interval here is a 95% CI."""
 
 
-@lru_cache(maxsize=None)
+@cache
 def t95(dof: int) -> float:
     """Two-sided ``CONFIDENCE`` quantile of Student's t with ``dof`` degrees of freedom (``Z95`` as ``dof`` grows).
 

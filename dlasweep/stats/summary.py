@@ -26,16 +26,26 @@ from functools import cached_property
 import numpy as np
 import xarray as xr
 
+from ..data.ragged import cluster_points
+from ..data.schema import config_dims, is_sweep, plain
+from ..data.selection import dataset_checked, with_selected_clusters
+from ..measures.shape import radius_of_gyration, time_depth_pairs
+from ..params import STATUSES
 from . import branches
 from .constants import LEVEL, MIN_CI_SEEDS, MIN_COUNT, RESAMPLES
 from .exact import against_exact
 from .extrapolation import extrapolate
-from .fit import (Fit, bootstrap_means, ensemble, fit_dimension, fit_mass_radius, growth_counts, history_counts, mass_radius_counts, seed_interval)
-from ..measures.shape import radius_of_gyration, time_depth_pairs
-from ..params import STATUSES
-from ..data.ragged import cluster_points
-from ..data.schema import config_dims, is_sweep, plain
-from ..data.selection import dataset_checked, with_selected_clusters
+from .fit import (
+    Fit,
+    bootstrap_means,
+    ensemble,
+    fit_dimension,
+    fit_mass_radius,
+    growth_counts,
+    history_counts,
+    mass_radius_counts,
+    seed_interval,
+)
 
 DEPTH_EDGES = np.linspace(0.0, 1.0, 11)
 """Bins of the depth at which a particle stuck: distance from the seed over the cluster's radius."""
@@ -95,7 +105,8 @@ SUMMARY = {
     "D_vs_exact": Summarised(_N, "D minus D of the exact method (other parameters equal) at equal N"),
     "D_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of D_vs_exact (both CIs in quadrature)"),
     "rg_mean_vs_exact": Summarised(_N, "rg_mean over rg_mean of the exact method, minus 1, at equal N"),
-    "rg_mean_vs_exact_half_width": Summarised(_N, f"{LEVEL} CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
+    "rg_mean_vs_exact_half_width": Summarised(_N,
+                                              f"{LEVEL} CI half-width of rg_mean_vs_exact (both CIs in quadrature)"),
     "rg_over_rmax_vs_exact": Summarised(_N, "rg_over_rmax minus that of the exact method at equal N"),
     "rg_over_rmax_vs_exact_half_width": Summarised(_N,
                                                    f"{LEVEL} CI half-width of rg_over_rmax_vs_exact (both CIs in "
@@ -132,8 +143,8 @@ SUMMARY = {
                                 "position on the sweep's cluster dimension of this seed's stored cluster, -1 if "
                                 "none", np.int64, -1),
     "D_reason": Summarised(_N, "why D_ok is 0; empty otherwise", str),
-    "D_ci_reason": Summarised(_N,
-                              f"why D has no {LEVEL} CI (and no other interval over seeds is given); empty otherwise", str),
+    "D_ci_reason": Summarised(_N, f"why D has no {LEVEL} CI (and no other interval over seeds is given); "
+                                  "empty otherwise", str),
     "D_inf_reason": Summarised((), "why D_inf is not given; empty otherwise", str),
 }
 """Every variable of ``summarise``'s dataset, in its order: the one place its dims, type and

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from ..data import schema
-from ..stats.fit import growth_counts
 from ..params import counted
+from ..stats.fit import growth_counts
 from .spec import Spec, SpecError
 from .task import sweep_scales
 

@@ -13,12 +13,12 @@ import itertools
 
 import numpy as np
 
-from ..measures import shape
 from ..data import schema
-from ..measures.boxes import default_scales
-from ..stats.fit import growth_counts
 from ..growth.cluster import grow, grow_many
+from ..measures import shape
+from ..measures.boxes import default_scales
 from ..params import Status, one_line
+from ..stats.fit import growth_counts
 from .spec import Spec
 
 
