@@ -219,7 +219,7 @@ def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
 
 @pytest.mark.parametrize("many", [False, True])
 def test_a_waiting_growth_gives_up_within_a_watch_once_stop_is_set(monkeypatch, many):
-    """What an interrupted sweep's closing relies on (``grow.STOP``): ``grow`` and ``grow_many``
+    """What an interrupted sweep's closing relies on (``growth.cluster.STOP``): ``grow`` and ``grow_many``
     raise ``Interrupted`` within ``WATCH_SECONDS`` of it, while their kernel still runs."""
     growing = importlib.import_module("dlasweep.growth.cluster")
     release = threading.Event()
@@ -318,7 +318,7 @@ def test_diffusion_times_are_four_bytes_and_saturate():
 
 
 def test_compiled_reads_numba_s_cache_of_each_growth_kernel(tmp_path):
-    """``grow.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
+    """``growth.cluster.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
     where numba's cache is empty."""
     growth = importlib.import_module("dlasweep.growth.cluster")
     for model in ("lattice", "offlattice"):

@@ -50,7 +50,7 @@ BENCH_SCHEMA = {
     "peak_memory": Variable(("run",), np.float64, MIB, "peak resident memory of the process"),
     "added_memory": Variable(("run",), np.float64, MIB, "peak resident memory added by growing the cluster"),
     **{f"{reads}_{when}": Variable(("run",), np.float64, "ns", f"time of a read waiting on the last within {mib:g} "
-                                   f"MiB, just {when} the run kept (dlasweep.host.shared_cache)")
+                                   f"MiB, just {when} the run kept (dlasweep.bench.host.shared_cache)")
        for reads, mib in BESIDE_A_RUN.items() for when in ("before", "after")},
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
@@ -259,7 +259,7 @@ def _to_dataset(rows) -> xr.Dataset:
     ds = xr.Dataset({name: column for name, column in columns.items() if name not in coords},
                     coords={name: columns[name] for name in coords},
                     attrs={"title": "dlasweep kernel benchmark",
-                           "history": netcdf.provenance("dlasweep.bench.run_bench")})
+                           "history": netcdf.provenance("dlasweep.bench.benchmark.run_bench")})
     return netcdf.describe(ds, BENCH_SCHEMA)
 
 

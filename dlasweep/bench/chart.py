@@ -1,7 +1,7 @@
 """The benchmark's chart: kernel time against N, log-log, one line per model (``dlasweep bench``'s ``bench.png``).
 
 Drawn in the report's style (``figures.new_figure``); reads what
-``bench.run_bench`` measured and computes nothing.
+``benchmark.run_bench`` measured and computes nothing.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ def plot_bench(ds, outdir) -> Path:
     Parameters
     ----------
     ds : xarray.Dataset
-        As from ``dlasweep.bench.run_bench``: dimension ``run``, coordinates
+        As from ``dlasweep.bench.benchmark.run_bench``: dimension ``run``, coordinates
         ``model``, ``method`` (``exact`` or ``naive``) and ``n``, variable
-        ``seconds``, attributes ``bench_targets.exponent_attribute(<model>)``.
+        ``seconds``, attributes ``targets.exponent_attribute(<model>)``.
     outdir : str or Path
         Created when missing.
 

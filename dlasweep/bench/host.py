@@ -4,7 +4,7 @@ A walker reads the grids near it at places it cannot know ahead, each read
 waiting on the last. While the grids fit the caches such a read costs a few
 nanoseconds; once they outgrow them, a trip to memory. Where that happens
 and what it costs are the host's, not the kernel's, and they move a cost
-exponent (``bench_targets.cost_exponent``) by more than its targets' margins: the same
+exponent (``targets.cost_exponent``) by more than its targets' margins: the same
 kernels measured 1.066 and 1.129 (2D lattice, 1e5 to 1e7) on two hosts a day
 apart. ``dlasweep bench`` and ``workflows/cost_exponent.py`` measure it in the
 same run as their clusters, so that rows from different hosts can be told apart.

@@ -51,7 +51,7 @@ class DlaAccessor:
 
         Returns
         -------
-        dlasweep.grow.Cluster
+        dlasweep.Cluster
             Shown as its picture in a notebook.
         """
         from .ragged import read_cluster
@@ -63,7 +63,7 @@ class DlaAccessor:
 
         Yields
         ------
-        dlasweep.grow.Cluster
+        dlasweep.Cluster
         """
         for k in range(len(self)):
             yield self.cluster(k)

@@ -56,7 +56,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
 
     Parameters
     ----------
-    source : dlasweep.grow.Cluster or xarray.Dataset
+    source : dlasweep.Cluster or xarray.Dataset
         A grown cluster, or a dataset (``open_sweep``) with ``cluster`` the
         position of the stored cluster to write.
     path : str or Path
@@ -105,7 +105,7 @@ def export_cluster(source, path, *, cluster=None, mesh="spheres") -> Path:
 def write_cluster(cluster, path, seed=0, *, style="disks", mesh="spheres", picture=None):
     """Write one cluster to ``path`` as its extension (one of ``SUFFIXES``) says.
 
-    ``.nc``: the dataset of one cluster (``store.cluster_dataset``); ``.png``
+    ``.nc``: the dataset of one cluster (``netcdf.cluster_dataset``); ``.png``
     and ``.svg``: its picture in ``style`` (``picture``: ``inches`` and
     ``dpi``, as ``pictures.draw_cluster``; a tree's ``.svg`` is the vector
     paths ``export_cluster`` writes); ``.csv``, ``.ply``, ``.obj``:

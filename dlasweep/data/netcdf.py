@@ -45,8 +45,8 @@ def to_dataset(spec, tasks, scales, history, science, cluster_particles, failed=
 
     Parameters
     ----------
-    spec : dlasweep.spec.Spec
-    tasks : list of the stored clusters' ``dlasweep.spec.Task`` (``spec.stores``), in task (C) order
+    spec : dlasweep.sweep.spec.Spec
+    tasks : list of the stored clusters' ``dlasweep.sweep.spec.Task`` (``spec.stores``), in task (C) order
     scales : ndarray, (n_scales,)
     history : ndarray of int, (n_history,)
         Counts of the growth history (``fit.growth_counts``).
@@ -125,7 +125,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
 
     Parameters
     ----------
-    cluster : dlasweep.grow.Cluster
+    cluster : dlasweep.Cluster
     seed : int
         The seed it was grown with.
     """
@@ -142,7 +142,7 @@ def cluster_dataset(cluster, seed) -> xr.Dataset:
     }
     attrs = {
         "title": "dlasweep: one diffusion-limited aggregation cluster",
-        "history": provenance("dlasweep.store.cluster_dataset"),
+        "history": provenance("dlasweep.data.netcdf.cluster_dataset"),
         "seed": int(seed),
     }
     return _describe(xr.Dataset(data, coords=coords, attrs=attrs))
@@ -465,7 +465,7 @@ def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
     ds : xarray.Dataset
         Changed in place and returned.
     schema : dict, optional
-        Its variables' table (default ``SCHEMA``; ``bench.BENCH_SCHEMA`` for ``dlasweep bench``).
+        Its variables' table (default ``SCHEMA``; ``bench.benchmark.BENCH_SCHEMA`` for ``dlasweep bench``).
     **globals_
         More global attributes (``featureType``), put first with ``Conventions`` and ``source``.
     """

@@ -1,6 +1,6 @@
 """One stored cluster of a dataset, read back from its CF ragged array: its points, parents, status, parameters.
 
-Indexing of an open dataset (``store.open_sweep``, or a sweep in memory),
+Indexing of an open dataset (``netcdf.open_sweep``, or a sweep in memory),
 no netCDF: the analysis and the pictures read clusters through here.
 Only the cluster's range of the per-particle arrays is read.
 """
@@ -83,7 +83,7 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
 
     Returns
     -------
-    dlasweep.grow.Cluster
+    dlasweep.Cluster
         ``status`` is the growth's outcome at the largest count; no
         checkpoint times (a sweep keeps them in ``wall_time``).
     """

@@ -6,7 +6,7 @@ CF contiguous ragged array, ``x``, ``y`` (``z``), ``diffusion_time`` and
 ``parent`` along ``particle`` with the count variable ``cluster_particles(cluster)``, whose
 parameters are the ``cluster_<name>`` coordinates on ``cluster``. Every
 model parameter that is not swept is a scalar coordinate, so ``ds["dim"]``
-or ``ds["model"]`` works whether or not it is a sweep axis. ``store``
+or ``ds["model"]`` works whether or not it is a sweep axis. ``netcdf``
 writes and opens the files; ``ragged`` reads one cluster back. No netCDF
 and no xarray here: a worker fills its arrays from this table alone.
 or ``ds["model"]`` works whether or not it is a sweep axis.

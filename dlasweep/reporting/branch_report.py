@@ -1,5 +1,5 @@
 """The report's branching: the figure of branch counts against Horton-Strahler order, and the table of
-bifurcation ratios (``branching.summary``'s numbers, drawn; nothing computed here)."""
+bifurcation ratios (``stats.branches.summary``'s numbers, drawn; nothing computed here)."""
 
 from __future__ import annotations
 

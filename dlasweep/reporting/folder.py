@@ -1,6 +1,6 @@
 """Report of a sweep: a summary table, plots and a short write-up.
 
-Draws and writes what ``analysis.summarise`` computes (the headline
+Draws and writes what ``stats.summary.summarise`` computes (the headline
 ensemble mass-radius D with its 95% CI, local slopes, D_inf, box-counting D,
 Rg, costs), read through ``readout.Readout`` (rows, labels, the exact
 reference, fitted lines, plot ranges, biases); it computes nothing else. Writes ``summary.csv``,
@@ -8,7 +8,7 @@ reference, fitted lines, plot ranges, biases); it computes nothing else. Writes 
 one report: an earlier report there is removed first (``files`` names
 everything a report may write), a folder holding anything else is refused.
 Plots the dataset has no data for are skipped, never drawn empty. The
-plots are ``report_plots``', the tables and the words ``report_text``'s;
+plots are ``plots``', the tables and the words ``text``'s;
 this module runs them into the folder.
 """
 

@@ -1,6 +1,6 @@
 """What ``dlasweep info`` says of a file: a sweep, one grown cluster or a benchmark, in the project's words.
 
-Reads an opened dataset (``store.open_dataset``) and returns lines of text;
+Reads an opened dataset (``netcdf.open_dataset``) and returns lines of text;
 the command line prints them under the file's history.
 """
 

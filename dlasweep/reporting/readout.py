@@ -1,7 +1,7 @@
 """What the report reads of a sweep and its summary: the report's view model.
 
 Everything the report draws or writes that is computed from a sweep and its
-summary (``analysis.summarise``), beyond the summary itself: the table's rows,
+summary (``stats.summary.summarise``), beyond the summary itself: the table's rows,
 names of configurations, the exact reference of each, fitted lines, plot
 ranges and biases. The report (``dlasweep.report``) only draws and writes
 these.

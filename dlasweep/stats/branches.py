@@ -46,7 +46,7 @@ def summary(ds, config_dims, clusters, min_seeds) -> xr.Dataset:
     clusters : dict
         (configuration index tuple, seed index) -> position on ``cluster``.
     min_seeds : int
-        Fewest clusters a CI is given from (``analysis.MIN_CI_SEEDS``).
+        Fewest clusters a CI is given from (``summary.MIN_CI_SEEDS``).
     """
     if "parent" not in ds.variables or not clusters:
         return xr.Dataset()

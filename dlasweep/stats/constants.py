@@ -1,7 +1,7 @@
 """The statistical constants, once: how sure an interval is, how it is resampled, where a fit starts.
 
 Every estimate of D, every interval and every growth history the package
-samples reads these (``fit``, ``analysis``, the report's words about them).
+samples reads these (``fit``, ``summary``, the report's words about them).
 """
 
 CONFIDENCE = 0.95
@@ -10,7 +10,7 @@ LEVEL = f"{CONFIDENCE:.0%}"
 """``CONFIDENCE`` as the words, labels and long names say it ("95%")."""
 
 RESAMPLES = 1000
-"""Bootstrap resamples over seeds. Each interval draws its own stream (``analysis``), so that
+"""Bootstrap resamples over seeds. Each interval draws its own stream (``summary``), so that
 reruns agree and a statistic does not depend on which others were computed before it."""
 
 MIN_CI_SEEDS = 3

@@ -35,7 +35,7 @@ def exact_reference(ds, config):
 
 
 def against_exact(ds, out):
-    """Fill ``out`` (``analysis.SUMMARY``'s arrays on a sweep ``ds``'s configurations) with each configuration's
+    """Fill ``out`` (``summary.SUMMARY``'s arrays on a sweep ``ds``'s configurations) with each configuration's
     departure from the exact method at equal N, its 95% CI half-width, and the Pareto front."""
     if not method_axes(ds):
         return

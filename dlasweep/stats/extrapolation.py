@@ -3,7 +3,7 @@
 D_eff(n) = D_inf + a n**-w is fitted over independent octaves for each
 correction exponent w of ``EXPONENTS``, from the lowest octave on at which
 the model describes the data; D_inf is given only where it does and its
-interval is narrow enough to say something (``analysis`` fills the
+interval is narrow enough to say something (``summary`` fills the
 summary's ``D_inf`` variables from it).
 """
 

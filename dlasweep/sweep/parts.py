@@ -7,7 +7,7 @@ records the spec's identity so that a changed spec is refused. A run holds
 an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
 same output is refused, and a killed run's lock is free at once. The
 stored clusters' positions go into ``OUT.parts/particles.nc`` while the
-sweep runs (``sweep``'s stream, ``store.ParticleWriter``). This module
+sweep runs (``runner``'s stream, ``netcdf.ParticleWriter``). This module
 knows files and locks, not dask, netCDF or the science.
 """
 

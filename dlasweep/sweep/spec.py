@@ -8,7 +8,7 @@ reported at once, naming its key.
 
 With ``[run] target_ci`` the seeds are a first batch: the sweep adds
 replicates until the headline D of every configuration is known to that
-precision, or ``[run] max_seeds`` are grown (``sweep.run_sweep``).
+precision, or ``[run] max_seeds`` are grown (``runner.run_sweep``).
 """
 
 from __future__ import annotations

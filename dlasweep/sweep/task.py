@@ -1,6 +1,6 @@
 """The worker's task: grow one cluster of a sweep and measure it at every count.
 
-What runs on a dask worker (``sweep`` submits ``measure_tasks``): the
+What runs on a dask worker (``runner`` submits ``measure_tasks``): the
 cluster grows once, to the largest count, from its own random stream
 ``SeedSequence(root_seed, spawn_key=grid indices)``, and each count is
 measured as a prefix. A task never raises: a failure is an ``error`` result
