@@ -224,7 +224,7 @@ def attributes(name, dtype=None, schema=None) -> dict:
     attrs = {"long_name": long_name, **({"units": var.units} if var.units else {}), **var.cf}
     if name == "status":
         attrs.update(flag_values=np.arange(len(STATUS_FLAGS), dtype=np.int8), flag_meanings=" ".join(STATUS_FLAGS))
-    elif dtype is bool:
+    elif dtype == bool:  # noqa: E721 (a numpy dtype, equal to bool for booleans; not a type comparison)
         attrs.update(flag_values=np.array([0, 1], np.int8), flag_meanings=BOOLEAN)
     return attrs
 
