@@ -1,44 +1,29 @@
 """dlasweep: parameter sweeps of diffusion-limited aggregation.
 
-Data flows one way: kernels -> ``grow`` -> ``measure`` -> ``fit`` -> ``sweep``
-(dask) -> ``store`` (netCDF) -> ``report`` (matplotlib) -> ``cli`` (argv).
+Subpackages by job, each importing only those below it: ``kernels`` -> ``growth`` -> ``measures`` ->
+``data`` -> ``stats`` -> ``sweep`` -> ``reporting`` and ``bench`` -> ``cli`` (the README's tour; the
+import contracts in pyproject.toml hold the order).
 """
 
 import importlib
 import importlib.abc
 import importlib.util
 import sys
-import types
 
 from ._version import __version__
 
 # Every name loads on first use: growing a cluster (a benchmark probe, a
 # worker) carries no dask, xarray or matplotlib, and the command line
 # (``_entry``) starts before numba and numpy load, so Ctrl-C is one line then too.
-_LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "boxes", "radius_of_gyration": "measure",
-         "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
-         "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "ragged", "cluster_parents": "ragged",
-         "read_cluster": "ragged", "export_cluster": "export",
-         "summarise": "analysis", "report": "report"}
-
-
-class _Package(types.ModuleType):
-    """The package, whose ``grow`` and ``report`` stay the functions when the submodules of those names load.
-
-    Importing a submodule binds it on its package; loaded lazily, module
-    ``dlasweep.report`` would then hide function ``dlasweep.report``.
-    """
-
-    def __setattr__(self, name, value):
-        if not (isinstance(value, types.ModuleType) and _LAZY.get(name) == name):
-            super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
+_LAZY = {"Cluster": "growth.cluster", "grow": "growth.cluster", "box_counts": "measures.boxes",
+         "radius_of_gyration": "measures.shape", "fit_dimension": "stats.fit", "fit_mass_radius": "stats.fit",
+         "load_spec": "sweep.spec", "run_sweep": "sweep.runner", "open_sweep": "data.netcdf",
+         "cluster_points": "data.ragged", "cluster_parents": "data.ragged", "read_cluster": "data.ragged",
+         "export_cluster": "data.export", "summarise": "stats.summary", "report": "reporting.folder"}
 
 
 def _register_accessor():
-    from . import accessor  # noqa: F401 (importing it registers ``Dataset.dla``)
+    from .data import accessor  # noqa: F401 (importing it registers ``Dataset.dla``)
 
 
 class _AfterXarray(importlib.abc.MetaPathFinder):
@@ -80,7 +65,9 @@ else:
 
 def __getattr__(name):
     if name in _LAZY:
-        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # once loaded, a plain attribute: no module of the package bears a public name
+        return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -21,18 +21,18 @@ import traceback
 import warnings
 from pathlib import Path
 
-from . import export as _export
 from . import params as _params
-from . import slurm
 from ._entry import command_of, loading
 from ._version import __version__
-from .bench_targets import MODELS as BENCH_MODELS
+from .bench.targets import MODELS as BENCH_MODELS
+from .data import export as _export
+from .data.paths import writable
 from .params import one_line as _one_line
-from .parts import Interrupted, ResumeError
-from .paths import writable
-from .pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
-from .progress import follow, growth_bar, steps_bar
-from .spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
+from .reporting.pictures import DEFAULT_INCHES, MAX_PIXELS, PANEL_PIXELS, check_size
+from .sweep import slurm
+from .sweep.parts import Interrupted, ResumeError
+from .sweep.progress import follow, growth_bar, steps_bar
+from .sweep.spec import MAX_PARTICLES, MAX_WORKERS, SpecError, load_spec
 
 
 class UsageError(ValueError):
@@ -58,8 +58,8 @@ def main(argv=None) -> int:
             return 2
         command = f"dlasweep {args.command}"
         with loading():  # numba, xarray and netCDF: the bulk of every command's modules
-            from . import store
-        with store.command_line(["dlasweep", *argv]):  # the files' history
+            from .data import netcdf
+        with netcdf.command_line(["dlasweep", *argv]):  # the files' history
             return args.handler(args)
     except SystemExit as done:  # --help, --version
         return int(done.code or 0)
@@ -90,7 +90,7 @@ def _refusal(err) -> bool:
     an error that is none of the others: only reading a file raises it, and by then xarray is loaded."""
     if isinstance(err, (UsageError, SpecError, ResumeError)):
         return True
-    from .schema import StoreError
+    from .data.schema import StoreError
 
     return isinstance(err, StoreError)
 
@@ -204,14 +204,14 @@ def _output(args, out) -> dict:
 
 
 def _export_cluster(args) -> int:
-    from . import ragged, store
+    from .data import netcdf, ragged
 
     out = args.output
     how = _output(args, out)
     _check_dataset(args.dataset)
     _check_writable(out)
     _check_new(out, args.force)
-    with store.open_sweep(args.dataset) as ds:
+    with netcdf.open_sweep(args.dataset) as ds:
         count = ds.sizes.get("cluster", 0)
         if not 0 <= args.cluster < count:
             raise UsageError(f"--cluster: {args.cluster} is not in [0, {count - 1}]" if count else
@@ -235,7 +235,7 @@ def _option(name, param) -> dict:
 
 
 def _grow(args) -> int:
-    from .grow import grow
+    from .growth.cluster import grow
 
     out = args.output
     how = _output(args, out)
@@ -276,8 +276,9 @@ def _sweep_target(args) -> tuple:
 
 
 def _sweep(args) -> int:
-    from . import plan as _plan
-    from .sweep import embedded_threads, run_sweep, scheduler_address
+    from .sweep import plan as _plan
+    from .sweep.runner import run_sweep
+    from .sweep.session import embedded_threads, scheduler_address
 
     spec, out = _sweep_target(args)
     if args.workers is not None:
@@ -393,9 +394,9 @@ def _slurm(args) -> int:
 
 
 def _report(args) -> int:
-    from . import store
-    from .report import ReportFolderError, earlier_report, report
-    from .schema import is_sweep
+    from .data import netcdf
+    from .data.schema import is_sweep
+    from .reporting.folder import ReportFolderError, earlier_report, report
 
     _check_dataset(args.dataset)
     outdir = args.output or args.dataset.with_suffix("")
@@ -404,7 +405,7 @@ def _report(args) -> int:
         earlier_report(outdir)
     except ReportFolderError as err:
         raise UsageError(f"-o {err}") from None
-    ds = store.open_sweep(args.dataset)
+    ds = netcdf.open_sweep(args.dataset)
     if not is_sweep(ds):
         ds.close()
         raise UsageError(f"{args.dataset}: holds one cluster (from `dlasweep grow`), not a sweep")
@@ -419,10 +420,11 @@ def _report(args) -> int:
 
 def _info(args) -> int:
     """Print what a dataset holds, in the project's words (``ncdump -h`` gives the raw header)."""
-    from . import info, store
+    from .data import netcdf
+    from .reporting import info
 
     _check_dataset(args.dataset)
-    ds = store.open_dataset(args.dataset)
+    ds = netcdf.open_dataset(args.dataset)
     try:
         lines = info.lines(ds)
     finally:
@@ -434,9 +436,9 @@ def _info(args) -> int:
 
 
 def _bench(args) -> int:
-    from . import store
-    from .bench import analysis_bench, run_bench
-    from .bench_plot import plot_bench
+    from .bench.benchmark import analysis_bench, run_bench
+    from .bench.chart import plot_bench
+    from .data import netcdf
 
     out = args.output
     _check_writable(out, folder=True)
@@ -450,7 +452,7 @@ def _bench(args) -> int:
     if not args.quick:
         ds.attrs.update({f"analysis_{k}": v for k, v in analysis_bench(echo=echo).items()})
     out.mkdir(parents=True, exist_ok=True)
-    store.save(ds, out / "bench.nc")
+    netcdf.save(ds, out / "bench.nc")
     plot_bench(ds, out)
     (out / "bench.txt").write_text("\n".join(["$ dlasweep bench " + " ".join(sys.argv[2:]), *lines, ""]))
     print(f"{out}: bench.nc, bench.png, bench.txt")

@@ -115,7 +115,7 @@ def run_cli(capsys):
 
 def science(ds):
     """The variables that must be bit-identical between runs (timings aside), clusters included."""
-    from dlasweep.schema import SCIENCE
+    from dlasweep.data.schema import SCIENCE
 
     names = [*SCIENCE, "cluster_particles", "x", "y", "diffusion_time"]
     return ds[names].drop_attrs(deep=False).load()
@@ -130,7 +130,7 @@ def files_under(path: Path) -> set:
 def reference(tmp_path_factory, dask_client):
     """The tiny sweep, run once on two in-process workers (for the sweep's and the parts' tests)."""
     import dlasweep as dla
-    from dlasweep.spec import parse_spec
+    from dlasweep.sweep.spec import parse_spec
 
     out = tmp_path_factory.mktemp("reference") / "tiny.nc"
     ds = dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=out)
@@ -144,7 +144,7 @@ class Interrupt(BaseException):
 
 def interrupt_after(monkeypatch, n_clusters):
     """Make the process die at the first part that would bring the saved clusters past n, as a kill would."""
-    from dlasweep.parts import Parts
+    from dlasweep.sweep.parts import Parts
 
     written = []
     real_write = Parts.write
@@ -161,7 +161,7 @@ def interrupt_after(monkeypatch, n_clusters):
 
 def finished_clusters(out):
     """The keys of the clusters finished in the parts of ``out``."""
-    from dlasweep.parts import Parts
+    from dlasweep.sweep.parts import Parts
 
     parts = Parts(Path(f"{out}.parts"))
     return [key for key in parts.where if parts.finished(key)]
@@ -175,7 +175,7 @@ def progress_lines(text) -> list:
 @pytest.fixture
 def replicate_1_fails(monkeypatch):
     """Make growing replicate 1 of every configuration raise, as a bug in a kernel would."""
-    from dlasweep import task as worker
+    from dlasweep.sweep import task as worker
 
     real_grow, real_grow_many = worker.grow, worker.grow_many
 

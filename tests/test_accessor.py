@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import dlasweep as dla
-from dlasweep import ragged, store
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged
 
 SPEC = """\
 name = "accessor"

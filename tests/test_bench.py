@@ -10,9 +10,9 @@ from dlasweep.cli import main
 def test_bench_quick_writes_its_outputs(tmp_path):
     from matplotlib.image import imread
 
-    from dlasweep.bench import BENCH_SCHEMA
-    from dlasweep.host import WORKING_SETS
-    from dlasweep.schema import attributes
+    from dlasweep.bench.benchmark import BENCH_SCHEMA
+    from dlasweep.bench.host import WORKING_SETS
+    from dlasweep.data.schema import attributes
 
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "-o", str(out)]) == 0
@@ -51,8 +51,8 @@ def test_bench_refuses_an_output_that_is_a_file(tmp_path, capsys):
 
 
 def test_target_table_compares_each_figure_with_its_target():
-    from dlasweep.bench import _to_dataset
-    from dlasweep.bench_targets import target_table, verdict
+    from dlasweep.bench.benchmark import _to_dataset
+    from dlasweep.bench.targets import target_table, verdict
 
     # time as N^1.2, steps per particle 10, 12, 14.4, 2**20 bytes per 1e5 particles added
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
@@ -61,8 +61,8 @@ def test_target_table_compares_each_figure_with_its_target():
     rows.append({"model": "offlattice-3d", "method": "exact", "n": 10**7, "seconds": 250.0, "n_grown": 10**7,
                  "steps": 10**9, "status": "ok", "peak_mb": 500.0, "added_mb": 300.0})
     lines = target_table(_to_dataset(rows))
-    assert lines[0] == ("| model | 1e7 s | 1e8 s | bytes/particle at 1e7 | bytes/particle at 1e8 | cost exponent 1e5 to 1e7 "
-                        "| steps/particle 1e7 over 1e5 |")
+    assert lines[0] == ("| model | 1e7 s | 1e8 s | bytes/particle at 1e7 | bytes/particle at 1e8 "
+                        "| cost exponent 1e5 to 1e7 | steps/particle 1e7 over 1e5 |")
     table = {line.split(" | ")[0].strip("| "): [c.strip(" |") for c in line.split(" | ")] for line in lines[2:]}
     lattice = table["lattice-2d"]
     assert lattice[1] == "502.4 (<= 60: 737% over)"
@@ -80,8 +80,8 @@ def test_target_table_compares_each_figure_with_its_target():
 def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
     # one fit for the table, the file's attribute, the printed line and the chart: runs below 1e5 (here
     # 1e3 and 1e4, at a tenth of the time the N^1.2 law gives) would pull an all-N fit to 1.25
-    from dlasweep.bench import _to_dataset
-    from dlasweep.bench_targets import cost_exponent, target_table
+    from dlasweep.bench.benchmark import _to_dataset
+    from dlasweep.bench.targets import cost_exponent, target_table
 
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2 * (0.1 if n < 10**5 else 1),
              "n_grown": n, "steps": 10 * n, "status": "ok", "peak_mb": 200.0, "added_mb": 1.0}
@@ -96,8 +96,8 @@ def test_the_cost_exponent_is_fitted_where_the_targets_are_set():
 def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
     # steps a particle as N^0.05 (with noise a log-log fit must carry through) and the whole time as
     # N^1.2: the parts are 0.05 and 0.15 where the fit is exact, and add up to the slope less one always
-    from dlasweep.bench import _exponent_line, _to_dataset
-    from dlasweep.bench_targets import cost_exponent, exponent_parts
+    from dlasweep.bench.benchmark import _exponent_line, _to_dataset
+    from dlasweep.bench.targets import cost_exponent, exponent_parts
 
     def rows(wobble):
         return [{"model": "offlattice-3d", "method": "exact", "n": n, "seconds": 3e-6 * n**1.2 * w,
@@ -118,8 +118,8 @@ def test_the_cost_exponent_splits_into_steps_and_the_cost_of_a_step():
 def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
     # time as N^1.2; the runs of 1e5 from 0.9 to 1.1 of it, of 1e6 from 0.8 to 1.25 (its weight in the
     # fit of 1e5, 1e6 and 1e7 is zero), one run of 1e7: the range is the slopes through 1e5's ends
-    from dlasweep.bench import _to_dataset
-    from dlasweep.bench_targets import cost_exponent, cost_exponent_range, target_table
+    from dlasweep.bench.benchmark import _to_dataset
+    from dlasweep.bench.targets import cost_exponent, cost_exponent_range, target_table
 
     spread = {10**5: (0.9, 1.1), 10**6: (0.8, 1.25), 10**7: (1.0, 1.0)}
     rows = [{"model": "lattice-2d", "method": "exact", "n": n, "seconds": 2e-6 * n**1.2, "n_grown": n,
@@ -138,7 +138,8 @@ def test_the_cost_exponents_range_takes_the_fastest_and_slowest_runs():
 def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeypatch):
     # every probe a little slower than the one before (a host that slows down): 1e5's six runs,
     # three before 1e7 and three after, span the drift, and the median is one of them
-    from dlasweep import bench, bench_targets
+    from dlasweep.bench import benchmark as bench
+    from dlasweep.bench import targets as bench_targets
 
     calls = []
 
@@ -173,7 +174,7 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
 
 
 def test_a_huge_bench_grows_1e8_once(monkeypatch):
-    from dlasweep import bench
+    from dlasweep.bench import benchmark as bench
 
     calls = []
 
@@ -192,7 +193,7 @@ def test_a_huge_bench_grows_1e8_once(monkeypatch):
 
 
 def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
-    from dlasweep import bench
+    from dlasweep.bench import benchmark as bench
 
     calls = []
 
@@ -227,7 +228,7 @@ def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
 
 
 def test_sweep_ratios_set_the_whole_process_against_its_kernels():
-    from dlasweep.bench import RATIO_TARGET, sweep_ratios
+    from dlasweep.bench.benchmark import RATIO_TARGET, sweep_ratios
 
     lines = []
     figures = sweep_ratios(echo=lines.append, sweeps=[(6, [50, 200])], threads=2)
@@ -242,7 +243,7 @@ def test_sweep_ratios_set_the_whole_process_against_its_kernels():
 def test_end_to_end_sets_a_sweep_and_its_report_against_the_growth(tmp_path):
     # A one-cluster sweep and its report as a user runs them, their peaks over the growth's own: the
     # processes hold the imports (and the report matplotlib), so at 2000 particles both exceed it.
-    from dlasweep.bench import _end_to_end_line, end_to_end, probe
+    from dlasweep.bench.benchmark import _end_to_end_line, end_to_end, probe
 
     params = {"model": "lattice", "dim": 2}
     grown = probe(params, 2000)
@@ -260,6 +261,6 @@ def test_end_to_end_sets_a_sweep_and_its_report_against_the_growth(tmp_path):
                                                    (20.8416, 20.8400, "over by 2 ms")])
 def test_shortfall_never_reads_over_by_nothing(seconds, target, said):
     """A sweep 1.6 ms over its target printed "over by 0.00 s" (bench --full, 2026-11-30)."""
-    from dlasweep.bench import shortfall
+    from dlasweep.bench.benchmark import shortfall
 
     assert shortfall(seconds, target) == said

@@ -1,13 +1,14 @@
-"""Branch statistics over seeds in ``dla.summarise`` and the report (``dlasweep.branching``)."""
+"""Branch statistics over seeds in ``dla.summarise`` and the report (``dlasweep.stats.branches``)."""
 
 import numpy as np
 import pytest
-from test_report import ALWAYS, synthetic_sweep
 
 import dlasweep as dla
-from dlasweep import branching, tree
-from dlasweep.fit import ensemble
-from dlasweep.report import report
+from dlasweep.measures import tree
+from dlasweep.reporting.folder import report
+from dlasweep.stats import branches as branching
+from dlasweep.stats.fit import ensemble
+from test_report import ALWAYS, synthetic_sweep
 
 
 @pytest.fixture(scope="module")

@@ -21,10 +21,12 @@ from hypothesis import strategies as st
 
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
-from dlasweep import cli, ragged, schema, store
-from dlasweep.parts import Parts
-from dlasweep.report import files as report_files
+from dlasweep import cli
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
 from dlasweep.params import PARAMETERS
+from dlasweep.reporting.folder import files as report_files
+from dlasweep.sweep.parts import Parts
 
 BAD_SPEC = TINY_SPEC.replace("stickiness = [1.0, 0.5]", "stickiness = [1.0, 0.0]")
 
@@ -86,7 +88,8 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, run_cli
     monkeypatch.chdir(tmp_path)
     (tmp_path / "spec.toml").write_text(TINY_SPEC)
     (tmp_path / "bad.toml").write_text(BAD_SPEC)
-    (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345", 'root_seed = 1\nstore_clusters = "few"'))
+    (tmp_path / "store.toml").write_text(TINY_SPEC.replace("root_seed = 12345",
+                                                           'root_seed = 1\nstore_clusters = "few"'))
     (tmp_path / "huge.toml").write_text(TINY_SPEC.replace("seeds = 3", "seeds = 100000000000"))
     (tmp_path / "heavy.toml").write_text("[grid]\nn_particles = 1e8\nseeds = 64\n[model]\ndim = 3\n[run]\n"
                                          "workers = 64\n")  # 64 clusters of 10^8 in 3D at once
@@ -130,7 +133,8 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
     assert "model parameter" not in text
     for name, param in PARAMETERS.items():
         assert f"--{name.replace('_', '-')}" in text and " ".join(param.meaning.split()) in text, name
-    for name, values in {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}.items():
+    choices = {"model": "lattice,offlattice", "seed_shape": "point,block,line", "launch": "circle,box"}
+    for name, values in choices.items():
         assert f"--{name.replace('_', '-')} {{{values}}}" in text
     assert "Default: 2*dim." in text and "Allowed: [0.0001, 1]." in text
 
@@ -138,7 +142,7 @@ def test_grow_help_comes_from_the_parameter_table(run_cli):
 @pytest.mark.parametrize("text, n", [("1e5", 100_000), ("1.5e3", 1500), ("100000", 100_000), ("2E3", 2000)])
 def test_n_is_any_integral_number(text, n, run_cli, tmp_path, monkeypatch):
     asked = []
-    module = importlib.import_module("dlasweep.grow")
+    module = importlib.import_module("dlasweep.growth.cluster")
     grow = module.grow
 
     def small(n, seed, **params):
@@ -302,7 +306,7 @@ def test_sweep_with_the_embedded_cluster_matches(run_cli, write_spec, tmp_path, 
 
 
 def test_failed_tasks_exit_1_naming_them(run_cli, write_spec, tmp_path, dask_cluster, monkeypatch):
-    from dlasweep import task as worker
+    from dlasweep.sweep import task as worker
 
     def broken(n, seed, **kwargs):
         raise MemoryError("no room")
@@ -448,7 +452,7 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    monkeypatch.setattr(importlib.import_module("dlasweep.grow"), "compiled",
+    monkeypatch.setattr(importlib.import_module("dlasweep.growth.cluster"), "compiled",
                         lambda model, dim, walkers: model != "offlattice")
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
     assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")

@@ -1,10 +1,10 @@
-"""The statistical constants are stated once, in dlasweep/config.py: the words say the confidence level from it."""
+"""The statistical constants are stated once, in dlasweep/stats/constants.py: the words say the confidence level
+from it."""
 
 import ast
 
 from conftest import ROOT
-
-from dlasweep.config import CONFIDENCE, LEVEL
+from dlasweep.stats.constants import CONFIDENCE, LEVEL
 
 
 def test_the_level_in_words_is_the_confidence_level():

@@ -5,6 +5,7 @@ import importlib.util
 import math
 
 import pytest
+
 from conftest import ROOT
 
 spec = importlib.util.spec_from_file_location("cost_exponent", ROOT / "workflows" / "cost_exponent.py")

@@ -1,4 +1,4 @@
-"""Exports of a cluster (``dlasweep.export``), read back by real readers: csv, plyfile and trimesh, xml."""
+"""Exports of a cluster (``dlasweep.data.export``), read back by real readers: csv, plyfile and trimesh, xml."""
 
 import csv
 import xml.etree.ElementTree as ET
@@ -9,7 +9,9 @@ import pytest
 import trimesh
 
 import dlasweep as dla
-from dlasweep import export, store, tree
+from dlasweep.data import export
+from dlasweep.data import netcdf as store
+from dlasweep.measures import tree
 
 CASES = {
     "off-2d": dict(model="offlattice"),
@@ -99,7 +101,8 @@ def test_svg_tree_is_one_polyline_per_branch_and_covers_every_bond(cluster, tmp_
         np.testing.assert_array_equal(counts, tree.branch_counts(cluster.parents))
     drawn = {tuple(np.r_[a, b]) for _, xy in lines for a, b in zip(xy[:-1], xy[1:])}
     child = np.flatnonzero(cluster.parents >= 0)
-    bonds = {tuple(float(f"{v:.3f}") for v in np.r_[points[p], points[c]]) for c, p in zip(child, cluster.parents[child])}
+    bonds = {tuple(float(f"{v:.3f}") for v in np.r_[points[p], points[c]])
+             for c, p in zip(child, cluster.parents[child])}
     wrapped = {b for b in bonds if abs(b[0] - b[2]) > 1.5}  # across a periodic side: not drawn as one segment
     assert drawn == bonds - wrapped
 
@@ -184,7 +187,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(argv, named, tmp_pat
 def test_a_large_cluster_streams_without_a_copy_of_the_file_in_memory(tmp_path):
     import tracemalloc
 
-    from dlasweep.grow import Cluster
+    from dlasweep.growth.cluster import Cluster
     from dlasweep.params import resolve
 
     n = 1_000_000

@@ -56,9 +56,9 @@ import hashlib
 
 import numpy as np
 import pytest
-from test_models import CASES
 
 import dlasweep as dla
+from test_models import CASES
 
 FINGERPRINTS = {
     "lattice-2d/600/0": "1cdff7b56816a0f3",

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.stats import t as stats_t
 
-from dlasweep.fit import ensemble, fit_dimension, fit_mass_radius, seed_interval, t95
-from dlasweep.boxes import box_counts
-from dlasweep.measure import radius_of_gyration
+from dlasweep.measures.boxes import box_counts
+from dlasweep.measures.shape import radius_of_gyration
+from dlasweep.stats.fit import ensemble, fit_dimension, fit_mass_radius, seed_interval, t95
 from known_sets import KNOWN
 
 TWO_DECADES = 100

@@ -15,7 +15,7 @@ from conftest import files_under
 
 COMMAND = [sys.executable, "-m", "dlasweep"]
 INTERRUPTED_WITHIN = 2.0
-"""Seconds a command may take to exit after SIGINT (it checks every ``grow.WATCH_SECONDS``)."""
+"""Seconds a command may take to exit after SIGINT (it checks every ``growth.cluster.WATCH_SECONDS``)."""
 
 
 def run(*argv, cwd, timeout=120):
@@ -129,7 +129,7 @@ def busy(argv):
 
 class Swallowing(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def find_spec(self, name, path, target=None):
-        return importlib.machinery.ModuleSpec(name, self) if name == "dlasweep.store" else None
+        return importlib.machinery.ModuleSpec(name, self) if name == "dlasweep.data.netcdf" else None
 
     def create_module(self, spec):
         return None
@@ -166,7 +166,7 @@ import os, signal, sys, time
 import numpy as np
 import netCDF4._netCDF4 as core
 import dlasweep as dla
-from dlasweep import export, schema, store
+from dlasweep.data import export, schema, netcdf as store
 
 signum = getattr(signal, sys.argv[1])
 if signum != signal.SIGINT:  # a handler such as ``dlasweep slurm``'s
@@ -247,7 +247,7 @@ def test_ctrl_c_ends_a_sweep_on_the_embedded_cluster(tmp_path):
 
 def test_ctrl_c_ends_a_sweep_of_large_clusters_without_waiting_for_its_kernels(tmp_path):
     """Closing the embedded cluster joins its threads, which waited for their kernels (30 s for these
-    clusters of 3e6 before ``grow.STOP``); now their growths give up and the command ends at once."""
+    clusters of 3e6 before ``growth.cluster.STOP``); now their growths give up and the command ends at once."""
     (tmp_path / "big.toml").write_text("[grid]\nn_particles = [3000000]\nseeds = 2\n")
     status, err, seconds = interrupt(["sweep", "big.toml", "-o", "big.nc"], tmp_path)
     assert status == 130 and err.splitlines()[-1].startswith("dlasweep sweep: interrupted"), err

@@ -4,8 +4,8 @@ reports each working set."""
 import numpy as np
 import pytest
 
-from dlasweep import host
-from dlasweep.host import LINE, latency_line, one_cycle, read_latency
+from dlasweep.bench import host
+from dlasweep.bench.host import LINE, latency_line, one_cycle, read_latency
 
 
 @pytest.mark.parametrize("lines", [2, 3, 64, 1000])

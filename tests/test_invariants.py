@@ -18,11 +18,11 @@ launch and kill rule that the kernels branch on; the rest are the variants of
 
 import numpy as np
 import pytest
-from naive import assert_offlattice_contacts, seed_count
-from test_models import CASES
 
 import dlasweep as dla
 from dlasweep.kernels.lattice.exits import unit_moves
+from naive import assert_offlattice_contacts, seed_count
+from test_models import CASES
 
 N = 20_000
 

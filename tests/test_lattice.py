@@ -3,12 +3,12 @@
 import os
 import sys
 
-import naive
 import numpy as np
 import pytest
 from scipy.stats import chi2
 
 import dlasweep as dla
+import naive
 from dlasweep.kernels import centres, maps
 from dlasweep.kernels.lattice import exits
 from dlasweep.kernels.lattice.exits import (
@@ -20,11 +20,11 @@ from dlasweep.kernels.lattice.exits import (
     symmetry,
     unit_moves,
 )
-from dlasweep.kernels.walk import seed_stream
 from dlasweep.kernels.lattice.field import FIELD_CAP, FIELD_PACKED, field_fill, field_lower, field_value
 from dlasweep.kernels.lattice.walker import distance_bound, release
 from dlasweep.kernels.lattice.words import fine3, rebuild, regrow
 from dlasweep.kernels.model import GRID_GROWTH
+from dlasweep.kernels.walk import seed_stream
 
 
 @pytest.mark.parametrize("dim, moore", [(2, False), (2, True), (3, False), (3, True)])
@@ -60,7 +60,10 @@ def test_exit_law_matches_single_steps(dim, moore, r):
     walks = 40_000
     x = naive.lattice_exits(unit_moves(dim, moore)[:, :dim], r, walks, np.random.default_rng(5))
     sites, probs = exit_law(dim, moore, r)
-    key = lambda s: tuple(sorted(np.abs(s)))
+
+    def key(s):
+        return tuple(sorted(np.abs(s)))
+
     classes = sorted({key(s) for s in sites})
     expected = np.array([probs[[key(s) == c for s in sites]].sum() for c in classes]) * walks
     observed = np.array([sum(key(s) == c for s in x) for c in classes])
@@ -193,7 +196,8 @@ def test_filled_is_np_full(n, value, dtype):
     assert np.array_equal(a, np.full(n, value, dtype))
 
 
-@pytest.mark.parametrize("n, dtype", [(3, np.uint64), (1000, np.uint8), (3 << 20, np.uint64), ((5 << 20) + 3, np.uint8)])
+@pytest.mark.parametrize("n, dtype", [(3, np.uint64), (1000, np.uint8), (3 << 20, np.uint64),
+                                      ((5 << 20) + 3, np.uint8)])
 def test_zeroed_is_np_zeros_even_where_the_heap_held_other_values(n, dtype):
     """``maps.zeroed`` gives zeros, small or large, also in memory the
     allocator hands out again after an array of other values was freed."""
@@ -383,7 +387,8 @@ def test_release_puts_walkers_uniformly_where_they_start(dim, where):
         assert (x[:, up] == (box_hi if box else launch_r)).all()
         across = x[:, :up]
         assert (across >= 0).all() and (across < size).all()
-        np.testing.assert_allclose(across.mean(0), (size - 1 if box else size) / 2, atol=5 * size / np.sqrt(12 * len(x)))
+        np.testing.assert_allclose(across.mean(0), (size - 1 if box else size) / 2,
+                                   atol=5 * size / np.sqrt(12 * len(x)))
     else:
         on = (x == box_lo) | (x == box_hi)
         assert on.any(1).all()

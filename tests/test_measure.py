@@ -7,10 +7,12 @@ import pytest
 
 import dlasweep
 import naive
+from dlasweep.measures import bitmaps as box_bitmaps
+from dlasweep.measures import boxes
+from dlasweep.measures import shape as measure
+from dlasweep.measures.boxes import box_counts, default_scales
+from dlasweep.measures.shape import max_radius, radius_of_gyration
 from known_sets import CARPET, DUST_2D, DUST_3D, MENGER, iterated, pascal_gasket
-from dlasweep import box_bitmaps, boxes, measure
-from dlasweep.boxes import box_counts, default_scales
-from dlasweep.measure import max_radius, radius_of_gyration
 
 
 def random_set(dim, lattice, n, width, seed):
@@ -396,7 +398,7 @@ def test_max_radius_of_every_prefix_matches_direct_computation():
 
 
 def test_anisotropy_matches_cos_4_theta_from_angles():
-    from dlasweep.measure import anisotropy
+    from dlasweep.measures.shape import anisotropy
 
     rng = np.random.default_rng(8)
     points = rng.normal(size=(501, 2)) * 10
@@ -415,7 +417,7 @@ def test_anisotropy_matches_cos_4_theta_from_angles():
     ids=["2d axes", "2d diagonals", "3d axes", "3d body diagonals"],
 )
 def test_anisotropy_of_arms_along_axes_and_diagonals(directions, expected):
-    from dlasweep.measure import anisotropy
+    from dlasweep.measures.shape import anisotropy
 
     arms = np.array(directions, float)
     points = np.r_[np.zeros((1, arms.shape[1])), np.concatenate([arms * k for k in range(1, 21)])]
@@ -460,7 +462,7 @@ def test_anisotropy_equals_the_median_of_a_sorted_array():
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_anisotropy_of_an_isotropic_cloud_is_zero(dim):
-    from dlasweep.measure import anisotropy
+    from dlasweep.measures.shape import anisotropy
 
     points = np.random.default_rng(dim).normal(size=(200_001, dim))
     points[0] = 0  # the seed at the centre of the cloud
@@ -472,8 +474,8 @@ def test_anisotropy_of_an_isotropic_cloud_is_zero(dim):
 @pytest.mark.slow
 def test_square_lattice_clusters_grow_along_the_axes_and_continuum_ones_do_not():
     import dlasweep as dla
-    from dlasweep.fit import ensemble
-    from dlasweep.measure import anisotropy
+    from dlasweep.measures.shape import anisotropy
+    from dlasweep.stats.fit import ensemble
 
     lattice = ensemble([anisotropy(dla.grow(n=30_000, seed=s).points, [30_000])[0] for s in range(6)])
     continuum = ensemble([anisotropy(dla.grow(n=10_000, seed=s, model="offlattice").points, [10_000])[0]

@@ -7,11 +7,11 @@ import sys
 import threading
 import time
 
-import naive
 import numpy as np
 import pytest
 
 import dlasweep as dla
+import naive
 from dlasweep.params import DEFAULTS
 
 N = 600
@@ -184,7 +184,7 @@ def test_shortcuts_agree_where_they_should_and_depart_where_they_should():
 
 @pytest.mark.parametrize("model", ["lattice", "offlattice"])
 def test_a_watched_growth_reports_its_particles_and_grows_the_same_cluster(model, monkeypatch):
-    growing = importlib.import_module("dlasweep.grow")  # the package attribute is the function
+    growing = importlib.import_module("dlasweep.growth.cluster")  # the package attribute is the function
 
     monkeypatch.setattr(growing, "WATCH_SECONDS", 1e-3)
     seen = []
@@ -205,7 +205,7 @@ def test_a_watched_growth_reports_its_particles_and_grows_the_same_cluster(model
 
 
 def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
-    growing = importlib.import_module("dlasweep.grow")  # the package attribute is the function
+    growing = importlib.import_module("dlasweep.growth.cluster")  # the package attribute is the function
 
     def broken(n, p, marks, rng, times=None):
         raise MemoryError("simulated")
@@ -219,9 +219,9 @@ def test_a_watched_growth_raises_what_the_kernel_raises(monkeypatch):
 
 @pytest.mark.parametrize("many", [False, True])
 def test_a_waiting_growth_gives_up_within_a_watch_once_stop_is_set(monkeypatch, many):
-    """What an interrupted sweep's closing relies on (``grow.STOP``): ``grow`` and ``grow_many``
+    """What an interrupted sweep's closing relies on (``growth.cluster.STOP``): ``grow`` and ``grow_many``
     raise ``Interrupted`` within ``WATCH_SECONDS`` of it, while their kernel still runs."""
-    growing = importlib.import_module("dlasweep.grow")
+    growing = importlib.import_module("dlasweep.growth.cluster")
     release = threading.Event()
 
     def slow(n, p, marks, rngs, times=None):
@@ -243,7 +243,7 @@ def test_a_waiting_growth_gives_up_within_a_watch_once_stop_is_set(monkeypatch, 
 
 
 def test_a_growth_that_ended_as_stop_was_set_is_kept(monkeypatch):
-    growing = importlib.import_module("dlasweep.grow")
+    growing = importlib.import_module("dlasweep.growth.cluster")
     kernel = growing.KERNELS["lattice"]
 
     def stopping(n, p, marks, rngs):
@@ -260,7 +260,7 @@ def test_a_growth_that_ended_as_stop_was_set_is_kept(monkeypatch):
 @pytest.mark.parametrize("kw", [{"model": "lattice"}, {"model": "offlattice"}, {"model": "lattice", "dim": 3},
                                 {"model": "offlattice", "size": 30}, {"model": "lattice", "walkers": 4, "size": 60}])
 def test_grow_many_grows_the_clusters_grow_grows_one_by_one(kw):
-    growing = importlib.import_module("dlasweep.grow")
+    growing = importlib.import_module("dlasweep.growth.cluster")
     seeds = [np.random.SeedSequence(5, spawn_key=(k,)) for k in range(4)]
     marks = [10, 200, 2000]
     many = growing.grow_many(2000, seeds, checkpoints=marks, **kw)
@@ -318,15 +318,15 @@ def test_diffusion_times_are_four_bytes_and_saturate():
 
 
 def test_compiled_reads_numba_s_cache_of_each_growth_kernel(tmp_path):
-    """``grow.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
+    """``growth.cluster.compiled`` (the CLI's "compiling kernels" notice) is true once a kernel is cached, false
     where numba's cache is empty."""
-    growth = importlib.import_module("dlasweep.grow")
+    growth = importlib.import_module("dlasweep.growth.cluster")
     for model in ("lattice", "offlattice"):
         for dim in (2, 3):
             dla.grow(20, seed=1, model=model, dim=dim)
             assert growth.compiled(model, dim)
         assert not growth.compiled(model, 4)  # each dimension's kernel is compiled apart
-    code = ("import importlib; g = importlib.import_module('dlasweep.grow'); "
+    code = ("import importlib; g = importlib.import_module('dlasweep.growth.cluster'); "
             "print(g.compiled('lattice', 2), g.compiled('offlattice', 2))")
     fresh = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                            env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})

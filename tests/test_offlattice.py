@@ -4,13 +4,13 @@ Everything is seeded, so each check is deterministic; the statistical
 tolerances below are stated where they are used.
 """
 
-import naive
 import numpy as np
 import pytest
 from scipy import stats
 from scipy.spatial import cKDTree
 
 import dlasweep as dla
+import naive
 from dlasweep.kernels import maps, walk
 
 OFF = {"model": "offlattice"}
@@ -262,10 +262,12 @@ def test_the_maps_keep_the_levels_their_bound_reads(dim, n):
     random points equals its value over maps of every level, each marked for every particle (level s:
     the 3**dim level-s cells about each particle's). The 2D seed's grid, too small for a pyramid, keeps
     them all, as its bound reads them at the field's cap."""
-    from dlasweep.kernels.offlattice import geometry, grid as ol
+    from dlasweep.kernels.offlattice import geometry
+    from dlasweep.kernels.offlattice import grid as ol
 
     rng = np.random.default_rng(dim)
-    pts = rng.normal(0, 25, (6, dim))[rng.integers(0, 6, n)] + rng.normal(0, 6, (n, dim)) if n > 1 else np.zeros((1, dim))
+    pts = (rng.normal(0, 25, (6, dim))[rng.integers(0, 6, n)] + rng.normal(0, 6, (n, dim)) if n > 1
+           else np.zeros((1, dim)))
     gi, _gf, words, start, blocks, cells, _dirr, _heads, field = ol.build_grid(
         dim, False, 0, np.abs(pts).max(), pts, n, np.full(n, -1, np.int32), 0)
     W = gi[geometry.MAP_WIDTH]
@@ -294,8 +296,9 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     pyramid's first two levels the distance from each cell's centre to the
     nearest held cell of the level below;
     random clustered sets, at points near and far (where the pyramid bounds)."""
-    from dlasweep.kernels.offlattice import geometry, grid as ol
     from dlasweep.kernels import centres
+    from dlasweep.kernels.offlattice import geometry
+    from dlasweep.kernels.offlattice import grid as ol
 
     rng = np.random.default_rng(7 + dim + 10 * line)
     size = 48 if line else 0
@@ -321,7 +324,8 @@ def test_field_and_maps_bound_the_nearest_distance(dim, line):
     top = centres.CENTRE_TOP[dim]
     centre = naive.centre_distances(unit, dim, fw, fs, centres.CENTRE_UNITS[dim], top)
     np.testing.assert_array_equal(naive.field_distances(field, dim, fw, top), centre)
-    assert centres.field_reach(centres.CCAP[dim - 2]) < geometry.LINE_PAD  # a substrate's images are marked as far as it sees
+    # a substrate's images are marked as far as it sees
+    assert centres.field_reach(centres.CCAP[dim - 2]) < geometry.LINE_PAD
     assert (centre < top).sum() > 500  # the test sees the field, not only its cap
     if not line:
         # each level above: the distance from each cell's centre to the nearest held cell of the level below
@@ -407,7 +411,8 @@ def test_the_cell_list_takes_particles_past_its_reserve_of_heads():
     fill (``celllist.more_heads``), and a particle attached when they are full
     waits (``HEADS_FULL``) and is put in by ``index_late``: each is then
     found where it is."""
-    from dlasweep.kernels.offlattice import geometry, grid as ol, walker
+    from dlasweep.kernels.offlattice import geometry, walker
+    from dlasweep.kernels.offlattice import grid as ol
     rng = np.random.default_rng(5)
     n = 4000
     pts = np.zeros((n + 1, 2))
@@ -437,7 +442,8 @@ def test_rows_sorted_by_cell_keep_every_list_and_go_back(case):
     cell and no other, a gather at any point finds the same particles (by their
     attachment numbers) at the same distances, and ``attachment_order`` gives
     back the rows in attachment order."""
-    from dlasweep.kernels.offlattice import celllist, grid as ol
+    from dlasweep.kernels.offlattice import celllist
+    from dlasweep.kernels.offlattice import grid as ol
 
     params = VARIANTS[case]
     dim, size = params.get("dim", 2), params.get("size", 0)
@@ -482,7 +488,8 @@ def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
     attachment order finds (by attachment number) at the same distances; each of those
     rows' runs ascends within one cell and goes on to that cell's sorted rows; and the
     rows below the tail do not move."""
-    from dlasweep.kernels.offlattice import celllist, grid as ol
+    from dlasweep.kernels.offlattice import celllist
+    from dlasweep.kernels.offlattice import grid as ol
 
     params = VARIANTS[case]
     dim, size = params.get("dim", 2), params.get("size", 0)
@@ -566,7 +573,8 @@ def test_a_rebuild_that_carries_the_field_builds_the_grid_anew_bit_for_bit(case)
     growth outgrows a grid. The old field's whole pages go back to the OS: they read zeros.
     In the large 2D case most of the first level lies beyond the reach of the
     particles near the old grid's edge: it is copied, not lowered again."""
-    from dlasweep.kernels.offlattice import geometry, grid as ol
+    from dlasweep.kernels.offlattice import geometry
+    from dlasweep.kernels.offlattice import grid as ol
 
     params = VARIANTS[case.removesuffix("-large")]
     dim = params.get("dim", 2)
@@ -608,7 +616,8 @@ def test_a_rebuild_lowers_again_exactly_the_cells_the_old_grid_lacked(dim):
     (along -x): their lowering beyond that edge is kept, so the grid equals
     ``build_grid``'s (a reach one cell shorter loses it: the field differs)."""
     from dlasweep.kernels.centres import CCAP, FCAP, FS
-    from dlasweep.kernels.offlattice import geometry, grid as ol
+    from dlasweep.kernels.offlattice import geometry
+    from dlasweep.kernels.offlattice import grid as ol
 
     step = maps.PYRAMID_STEP[dim]
     half = geometry.layout(dim, False, 0, 300.0)[0][geometry.COVERED]

@@ -4,13 +4,13 @@ import itertools
 
 import numpy as np
 import pytest
-from naive import seed_count
-from test_models import CASES
 
 import dlasweep as dla
-from dlasweep.grow import grow_many
+from dlasweep.growth.cluster import grow_many
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.parents import lattice_parents
+from naive import seed_count
+from test_models import CASES
 
 N = 600
 

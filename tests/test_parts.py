@@ -1,4 +1,4 @@
-"""The OUT.parts folder (dlasweep/parts.py): parts written and read back, the manifest, the lock."""
+"""The OUT.parts folder (dlasweep/sweep/parts.py): parts written and read back, the manifest, the lock."""
 
 import contextlib
 import errno
@@ -14,10 +14,10 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import TINY_SPEC, Interrupt, files_under, finished_clusters, interrupt_after, science
-from dlasweep import store
-from dlasweep import task as worker
-from dlasweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
-from dlasweep.spec import parse_spec
+from dlasweep.data import netcdf as store
+from dlasweep.sweep import task as worker
+from dlasweep.sweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
+from dlasweep.sweep.spec import parse_spec
 
 
 def test_resume_refuses_a_changed_spec(tmp_path, dask_client, monkeypatch):
@@ -54,7 +54,8 @@ def test_a_part_cut_short_by_a_full_disk_leaves_no_temporary_file(tmp_path, dask
 @contextlib.contextmanager
 def locked_by_another_process(folder):
     """Hold the lock of a parts folder from another process, as a running sweep does; yield that process."""
-    code = "import sys, pathlib, dlasweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); input()"
+    code = ("import sys, pathlib, dlasweep.sweep.parts as s; s._lock(pathlib.Path(sys.argv[1])); print(1, flush=True); "
+            "input()")
     holder = subprocess.Popen([sys.executable, "-c", code, str(folder)], stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE)
     try:
@@ -133,7 +134,8 @@ def test_parts_kept_in_memory_read_as_the_files(tmp_path, monkeypatch, kept):
     parts = Parts(tmp_path)
     monkeypatch.setattr(Parts, "KEEP_BYTES", 1 << 28 if kept else 0)
     for batch in (tasks[:3], tasks[3:4], tasks[4:]):
-        parts.write({t.key: r for t, r in zip(batch, worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch)))})
+        results = worker.measure_tasks(batch, counts, scales, 1, [True] * len(batch))
+        parts.write({t.key: r for t, r in zip(batch, results)})
         if kept == 1:  # both budgets spent
             parts._kept_bytes = dict.fromkeys(parts._kept_bytes, Parts.KEEP_BYTES)
     assert len(parts._kept) == kept and all({"points", "box_count"} <= set(k) for k in parts._kept.values())
@@ -193,7 +195,7 @@ def test_the_stream_writes_a_finished_cluster_from_memory_and_a_later_one_from_i
     # A cluster finished in order is written to the file from the results in hand, not read back from its
     # part (a 1e8 cluster, too large to keep, was read back beside its own 1.6 GB); one that finished
     # before an earlier cluster is read from its part once that earlier one is in.
-    from dlasweep.sweep import _Stream
+    from dlasweep.sweep.runner import _Stream
 
     spec = parse_spec(TINY_SPEC)
     tasks = [t for t in spec.tasks() if spec.stores(t)][:3]
@@ -223,7 +225,7 @@ def test_the_stream_writes_a_finished_cluster_from_memory_and_a_later_one_from_i
 
 
 def test_walk_steps_at_each_count_are_the_cumulative_sums():
-    from dlasweep.task import _prefix_sums
+    from dlasweep.sweep.task import _prefix_sums
 
     steps = np.random.default_rng(2).integers(0, 2**32 - 1, 1000, dtype=np.uint64).astype(np.uint32)
     prefix = np.array([1, 1, 7, 500, 1000])

@@ -6,8 +6,8 @@ import os
 import pytest
 
 import dlasweep as dla
-from dlasweep import store
-from dlasweep.paths import writable
+from dlasweep.data import netcdf as store
+from dlasweep.data.paths import writable
 
 
 def test_each_way_a_target_cannot_be_written_names_it(tmp_path):

@@ -3,6 +3,7 @@
 import importlib.util
 
 import pytest
+
 from conftest import ROOT
 
 spec = importlib.util.spec_from_file_location("peer_fastdla", ROOT / "workflows" / "peer_fastdla.py")

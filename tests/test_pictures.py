@@ -8,7 +8,7 @@ from matplotlib.image import imread
 
 import dlasweep as dla
 from conftest import files_under
-from dlasweep.pictures import cluster_figure, describe, draw_cluster, draw_points
+from dlasweep.reporting.pictures import cluster_figure, describe, draw_cluster, draw_points
 
 
 def png_size(path):
@@ -145,7 +145,7 @@ def test_grow_draws_the_size_asked_and_svg_still_works(run_cli, tmp_path):
 def test_sites_placed_a_chunk_at_a_time_show_as_placed_at_once(dim, monkeypatch, tmp_path):
     """The lattice image is built a chunk of sites at a time (10^8 sites in bounded memory): a pixel
     shared across chunks still shows its nearest, then last attached, site."""
-    import dlasweep.pictures as pictures
+    import dlasweep.reporting.pictures as pictures
 
     c = dla.grow(20000 if dim == 2 else 3000, seed=5, dim=dim)
     draw_cluster(c.points, c.params, tmp_path / "whole.png", dpi=34)

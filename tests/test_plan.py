@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import TINY_SPEC
-from dlasweep import plan
-from dlasweep.schema import ragged_columns
-from dlasweep.spec import SpecError, parse_spec
+from dlasweep.data.schema import ragged_columns
+from dlasweep.sweep import plan
+from dlasweep.sweep.spec import SpecError, parse_spec
 
 GB = 10 ** 9
 LATTICE_2D_BYTES = sum(np.dtype(d).itemsize for d in ragged_columns(["lattice"], [2]).values())
@@ -41,7 +41,8 @@ def test_a_target_sweep_is_planned_at_its_max_seeds_and_stored_clusters_are_coun
 @pytest.mark.parametrize("room, local, key", [
     (plan.Room(memory=GB // 10, disk=None), True, r"grid.n_particles: the sweep needs about 1\.\d GB of memory, "
                                                   r"100\.0 MB available \(4 clusters of up to 10,000,000 particles\)"),
-    (plan.Room(memory=None, disk=GB // 10), True, r"grid.seeds: the sweep needs about 1\.\d GB of disk, 100\.0 MB free"),
+    (plan.Room(memory=None, disk=GB // 10), True,
+     r"grid.seeds: the sweep needs about 1\.\d GB of disk, 100\.0 MB free"),
     (plan.Room(memory=GB // 10, disk=GB // 10), False, r"grid.seeds: the sweep needs about 1\.\d GB of disk"),
 ])
 def test_what_does_not_fit_is_refused_naming_the_key(room, local, key):

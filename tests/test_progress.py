@@ -1,11 +1,12 @@
-"""A sweep's progress lines for a log (dlasweep/progress.py); the terminal's bars are tested through the command."""
+"""A sweep's progress lines for a log (dlasweep/sweep/progress.py); the terminal's bars are tested through the
+command."""
 
 import io
 
 import pytest
 
 from conftest import progress_lines
-from dlasweep import progress
+from dlasweep.sweep import progress
 
 
 @pytest.mark.parametrize("seconds_each, shown", [

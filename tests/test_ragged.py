@@ -1,9 +1,9 @@
-"""One stored cluster read back from the ragged array (dlasweep/ragged.py): by its index or its parameters."""
+"""One stored cluster read back from the ragged array (dlasweep/data/ragged.py): by its index or its parameters."""
 
 import numpy as np
 import pytest
 
-from dlasweep import ragged
+from dlasweep.data import ragged
 from test_store import synthetic_dataset
 
 

@@ -12,13 +12,13 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import colours_shown
-from dlasweep.boxes import box_counts, default_scales
-from dlasweep.measure import anisotropy, max_radius, radius_of_gyration
-from dlasweep import schema
-from dlasweep.config import MIN_CI_SEEDS
-from dlasweep.readout import Readout
+from dlasweep.data import schema
+from dlasweep.measures.boxes import box_counts, default_scales
+from dlasweep.measures.shape import anisotropy, max_radius, radius_of_gyration
 from dlasweep.params import STATUSES
-from dlasweep.report import report
+from dlasweep.reporting.folder import report
+from dlasweep.reporting.readout import Readout
+from dlasweep.stats.constants import MIN_CI_SEEDS
 
 
 def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=False):
@@ -80,8 +80,8 @@ def synthetic_sweep(axes, sizes=(0,), counts=(100, 300, 800), seeds=3, parents=F
     return ds
 
 
-ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "box_local_slopes.png", "mass_radius.png", "anisotropy.png",
-          "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
+ALWAYS = {"summary.csv", "summary.md", "report.md", "gallery.png", "box_counts.png", "box_local_slopes.png",
+          "mass_radius.png", "anisotropy.png", "dimension_vs_n.png", "dimension_spread.png", "diffusion_times.png"}
 
 
 def test_report_writes_every_file_and_skips_absent_axes(tmp_path):
@@ -135,9 +135,11 @@ def test_report_tells_its_progress_step_by_step(tmp_path):
     report(synthetic_sweep({"stickiness": [1.0, 0.5]}), tmp_path / "out",
            progress=lambda done, steps, name: calls.append((done, steps, name)))
     plots = [name for _, _, name in calls[2:-2]]
-    assert [done for done, _, _ in calls] == list(range(len(calls))) and {steps for _, steps, _ in calls} == {len(calls) - 1}
+    assert [done for done, _, _ in calls] == list(range(len(calls)))
+    assert {steps for _, steps, _ in calls} == {len(calls) - 1}
     assert [name for _, _, name in calls[:2]] == ["summary", "tables"] and calls[-2][2] == "report.md"
-    assert calls[-1][2] == "" and {f"{name}.png" for name in plots} >= ALWAYS - {"summary.csv", "summary.md", "report.md"}
+    assert calls[-1][2] == ""
+    assert {f"{name}.png" for name in plots} >= ALWAYS - {"summary.csv", "summary.md", "report.md"}
 
 
 def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
@@ -153,7 +155,7 @@ def test_report_draws_speed_accuracy_and_marks_flagged_configurations(tmp_path):
 
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_draw_cluster_writes_a_picture(tmp_path, suffix):
-    from dlasweep.pictures import draw_cluster
+    from dlasweep.reporting.pictures import draw_cluster
 
     c = dla.grow(300, seed=1)
     path = draw_cluster(c.points, c.params, tmp_path / f"cluster{suffix}")
@@ -165,8 +167,8 @@ def test_draw_cluster_writes_a_picture(tmp_path, suffix):
 
 
 def test_plot_bench_writes_the_time_against_n_chart(tmp_path):
-    from dlasweep.bench import _to_dataset
-    from dlasweep.bench_plot import plot_bench
+    from dlasweep.bench.benchmark import _to_dataset
+    from dlasweep.bench.chart import plot_bench
 
     runs = [("lattice-2d", "exact", n, 1e-6 * n**1.1) for n in (1_000, 10_000, 100_000)]
     runs += [("offlattice-2d", "exact", n, 2e-6 * n) for n in (1_000, 10_000)]
@@ -197,14 +199,14 @@ root_seed = 3
 
 @pytest.fixture(scope="module")
 def thirty_variants(dask_client):
-    from dlasweep.spec import parse_spec
+    from dlasweep.sweep.spec import parse_spec
 
     return dla.run_sweep(parse_spec(THIRTY), client=dask_client)
 
 
 def drawn(monkeypatch, plot, ds, tmp_path, caption=False):
     """Run one plot of the report and return its Figure (and its caption) instead of only a file."""
-    from dlasweep import report_plots
+    from dlasweep.reporting import plots as report_plots
 
     figures = []
     monkeypatch.setattr(report_plots, "save_figure", lambda fig, path: figures.append(fig) or fig.savefig(path))
@@ -220,7 +222,7 @@ def overlaps(a, b):
 
 
 def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, monkeypatch, tmp_path):
-    from dlasweep.report_plots import _speed_accuracy
+    from dlasweep.reporting.plots import _speed_accuracy
 
     fig = drawn(monkeypatch, _speed_accuracy, thirty_variants, tmp_path)
     panels = [ax for ax in fig.axes if ax.get_visible()]
@@ -239,7 +241,7 @@ def test_speed_accuracy_stays_readable_with_thirty_variants(thirty_variants, mon
 
 
 def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_variants, monkeypatch, tmp_path):
-    from dlasweep.report_plots import _failure
+    from dlasweep.reporting.plots import _failure
 
     fig, caption = drawn(monkeypatch, _failure, thirty_variants, tmp_path, caption=True)
     panels = [ax for ax in fig.axes if ax.get_visible()]
@@ -259,7 +261,7 @@ def test_failure_draws_the_exact_method_as_a_band_not_a_point_at_zero(thirty_var
 
 
 def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch, tmp_path):
-    from dlasweep.report_plots import _failure
+    from dlasweep.reporting.plots import _failure
 
     assert _failure(Readout(synthetic_sweep({"stickiness": [1.0, 0.5]}, counts=(200, 400), seeds=2)),
                     tmp_path / "none.png") is None
@@ -275,7 +277,7 @@ def test_failure_says_only_what_it_draws_and_skips_model_parameters(monkeypatch,
 
 
 def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_path):
-    from dlasweep.report_plots import _dimension_vs_n, _mass_radius
+    from dlasweep.reporting.plots import _dimension_vs_n, _mass_radius
 
     ds = synthetic_sweep({"stickiness": [1.0, 0.5, 0.2]}, counts=(200, 600), seeds=MIN_CI_SEEDS - 1)
     fig, caption = drawn(monkeypatch, _dimension_vs_n, ds, tmp_path, caption=True)
@@ -292,7 +294,7 @@ def test_dimension_against_n_is_one_panel_per_configuration(monkeypatch, tmp_pat
 
 
 def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_path):
-    from dlasweep.report_plots import _box_local_slopes, _diffusion_times
+    from dlasweep.reporting.plots import _box_local_slopes, _diffusion_times
 
     ds = synthetic_sweep({"jumps": [True, False]}, counts=(100, 200), seeds=2)
     fig = drawn(monkeypatch, _box_local_slopes, ds, tmp_path)
@@ -307,7 +309,7 @@ def test_box_slopes_and_diffusion_times_say_what_they_measure(monkeypatch, tmp_p
 
 
 def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tmp_path):
-    from dlasweep.report_plots import _anisotropy, _dimension_spread, _speed_accuracy
+    from dlasweep.reporting.plots import _anisotropy, _dimension_spread, _speed_accuracy
 
     ds = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(200, 400), seeds=2)
     for plot in (_anisotropy, _dimension_spread, _speed_accuracy):
@@ -325,6 +327,6 @@ def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
     assert value == two["D"] - one["D"] and 0 < half < abs(value) + 1
     assert half == pytest.approx(np.hypot(one["D_ci_hi"] - one["D_ci_lo"], two["D_ci_hi"] - two["D_ci_lo"]) / 2)
     report(ds, tmp_path)
-    line = next(l for l in (tmp_path / "report.md").read_text().splitlines()
-                if l.startswith("- stickiness=0.1 against stickiness=1.0: "))
+    line = next(text for text in (tmp_path / "report.md").read_text().splitlines()
+                if text.startswith("- stickiness=0.1 against stickiness=1.0: "))
     assert line.endswith("(resolved)") == (abs(value) > half) and ("|dev| <" in line) == (abs(value) <= half)

@@ -1,4 +1,4 @@
-"""``dlasweep slurm`` (dlasweep/slurm.py): its options without SLURM, then on a real one-node SLURM
+"""``dlasweep slurm`` (dlasweep/sweep/slurm.py): its options without SLURM, then on a real one-node SLURM
 (workflows/slurm_local.py).
 
 The SLURM tests start the daemons once for the module (installing the packages
@@ -22,12 +22,12 @@ from pathlib import Path
 
 import pytest
 import xarray as xr
-from conftest import ROOT, science
-from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 import dlasweep as dla
-from dlasweep import slurm as launcher
-from dlasweep.spec import load_spec, parse_spec
+from conftest import ROOT, science
+from dlasweep.sweep import slurm as launcher
+from dlasweep.sweep.spec import load_spec, parse_spec
+from test_sweep import SLOW_SPEC, finished_clusters, wait_for
 
 
 def _workflow(name):

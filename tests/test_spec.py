@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, TINY_SPEC
-from dlasweep.spec import SpecError, differences, load_spec, parse_spec
+from dlasweep.sweep.spec import SpecError, differences, load_spec, parse_spec
 
 
 def test_tiny_spec_grid():

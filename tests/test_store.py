@@ -1,4 +1,5 @@
-"""The netCDF layer: one round trip of the dataset layout (README, "The dataset"), CF compliance, atomic writes, bad files."""
+"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (README, "The dataset"), CF
+compliance, atomic writes, bad files."""
 
 import os
 import re
@@ -11,13 +12,15 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import ROOT
 
 import dlasweep as dla
-from dlasweep import bench, ragged, schema, store
-from dlasweep.grow import Cluster
+from conftest import ROOT
+from dlasweep.bench import benchmark as bench
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
+from dlasweep.growth.cluster import Cluster
 from dlasweep.params import PARAMETERS, resolve
-from dlasweep.spec import parse_spec
+from dlasweep.sweep.spec import parse_spec
 
 SPEC = """\
 name = "layout"
@@ -138,7 +141,7 @@ CHECKER_NOTE = "cluster_particles: attribute sample_dimension is being used in a
 
 
 def unexplained(path, messages) -> list:
-    """cfchecker's messages less those dlasweep.store explains (CF in its docstring): the checker's note on
+    """cfchecker's messages less those dlasweep.data.netcdf explains (CF in its docstring): the checker's note on
     the count variable, its notes on booleans' flags (coordinates, where CF-1.8 names none) and its warning
     on swept strings (coordinate variables of char, for xarray to select by)."""
     with netCDF4.Dataset(path) as nc:
@@ -219,7 +222,8 @@ def test_clusters_are_a_cf_ragged_array_of_trajectories(saved, tmp_path):
         roles = {name: var.cf_role for name, var in nc.variables.items() if "cf_role" in var.ncattrs()}
         assert roles == {"cluster": "trajectory_id"} and nc["cluster"].dimensions == ("cluster",)
         np.testing.assert_array_equal(nc["cluster"][:], np.arange(nc.dimensions["cluster"].size))
-        assert nc["diffusion_time"].coordinates == nc["parent"].coordinates == "x y" and (nc["x"].axis, nc["y"].axis) == ("X", "Y")
+        assert nc["diffusion_time"].coordinates == nc["parent"].coordinates == "x y"
+        assert (nc["x"].axis, nc["y"].axis) == ("X", "Y")
         # No attribute but CF's: xarray's own marker of booleans ("dtype") is gone.
         assert [name for name, var in nc.variables.items() if "dtype" in var.ncattrs()] == []
         assert nc["jumps"].dtype == np.int8 and nc["jumps"].flag_meanings == "false true"

@@ -5,16 +5,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import TINY_SPEC
-from test_sweep import Interrupt, batches_of, interrupt_after
 
 import dlasweep as dla
-from dlasweep import branching, ragged, store
-from dlasweep.fit import fit_mass_radius, growth_counts
-from dlasweep.parts import Parts, ResumeError
-from dlasweep.measure import radius_of_gyration
-from dlasweep.report import report
-from dlasweep.spec import parse_spec
+from conftest import TINY_SPEC
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged
+from dlasweep.measures.shape import radius_of_gyration
+from dlasweep.reporting.folder import report
+from dlasweep.stats import branches as branching
+from dlasweep.stats.fit import fit_mass_radius, growth_counts
+from dlasweep.sweep.parts import Parts, ResumeError
+from dlasweep.sweep.spec import parse_spec
+from test_sweep import Interrupt, batches_of, interrupt_after
 
 PER_PARTICLE = ("x", "y", "diffusion_time", "parent", "cluster_particles")
 """The variables of the stored clusters; everything else is measured for every cluster."""
@@ -39,7 +41,8 @@ def clusters_of(ds):
     names = [c for c in ds.coords if c.startswith("cluster_")]
     ends = np.cumsum(ds["cluster_particles"].values)
     return {tuple(ds[c].values[i].item() for c in names):
-            (ragged.cluster_points(ds, i), ds["diffusion_time"].values[ends[i] - ds["cluster_particles"].values[i]:ends[i]])
+            (ragged.cluster_points(ds, i),
+             ds["diffusion_time"].values[ends[i] - ds["cluster_particles"].values[i]:ends[i]])
             for i in range(ds.sizes["cluster"])}
 
 

@@ -1,8 +1,8 @@
 """Sweeps: results equal direct growth, do not depend on workers, survive interruption."""
 
 import contextlib
-import functools
 import errno
+import functools
 import gc
 import json
 import os
@@ -21,10 +21,15 @@ from distributed import Client, LocalCluster
 
 import dlasweep as dla
 from conftest import TINY_SPEC, Interrupt, files_under, finished_clusters, interrupt_after, progress_lines, science
-from dlasweep import boxes, measure, progress, ragged, schema, store, sweep
-from dlasweep import task as worker
-from dlasweep.parts import Parts, ResumeError
-from dlasweep.spec import parse_spec
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged, schema
+from dlasweep.measures import boxes
+from dlasweep.measures import shape as measure
+from dlasweep.sweep import progress, session
+from dlasweep.sweep import runner as sweep
+from dlasweep.sweep import task as worker
+from dlasweep.sweep.parts import Parts, ResumeError
+from dlasweep.sweep.spec import parse_spec
 
 
 def test_clusters_and_measures_equal_direct_growth(reference):
@@ -73,7 +78,8 @@ def record_writes(monkeypatch):
 
 def batches_of(monkeypatch, size):
     """Make every dask task a batch of ``size`` clusters (the last one: what is left)."""
-    monkeypatch.setattr(sweep, "_batches", lambda todo, _, threads: (todo[i:i + size] for i in range(0, len(todo), size)))
+    monkeypatch.setattr(sweep, "_batches",
+                        lambda todo, _, threads: (todo[i:i + size] for i in range(0, len(todo), size)))
 
 
 def test_the_batch_size_follows_the_counts():
@@ -196,7 +202,7 @@ def test_clusters_go_into_the_file_while_the_sweep_runs(tmp_path, dask_client, m
 def test_a_sweep_lists_its_tasks_once(tmp_path, dask_client, monkeypatch, reference):
     """The grid is listed once, not once each for the work to do, the file's stream, the dataset, its stored
     clusters and the clusters read back: 15 s a listing at ``spec.MAX_TASKS`` clusters."""
-    from dlasweep.spec import Spec
+    from dlasweep.sweep.spec import Spec
 
     listings, tasks = [], Spec.tasks
 
@@ -223,7 +229,7 @@ def test_the_embedded_cluster_shortens_the_switch_interval_and_restores_it(monke
 
     monkeypatch.setattr(worker, "growth_counts", counted)
     dla.run_sweep(parse_spec("[grid]\nn_particles = [5]\nseeds = 2\n"), workers=1)
-    assert sweep.SWITCH_INTERVAL in during and sys.getswitchinterval() == before != sweep.SWITCH_INTERVAL
+    assert session.SWITCH_INTERVAL in during and sys.getswitchinterval() == before != session.SWITCH_INTERVAL
 
 
 def test_the_embedded_cluster_has_its_kernels_loaded_before_the_first_task(monkeypatch):
@@ -329,7 +335,8 @@ def test_a_spec_of_lockstep_walkers_compiles_when_only_one_walkers_kernel_is_cac
 
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
     spec = parse_spec(TINY_SPEC)
-    code = "import sys, dlasweep.sweep as s, dlasweep.spec as p; print(s._compiles(p.parse_spec(sys.argv[1])))"
+    code = ("import sys, dlasweep.sweep.runner as s, dlasweep.sweep.spec as p; "
+            "print(s._compiles(p.parse_spec(sys.argv[1])))")
     cold = subprocess.run([sys.executable, "-c", code, TINY_SPEC], capture_output=True, text=True, check=True,
                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     dla.grow(20, 0, model="lattice")  # compiles into the cache, if it is not there yet
@@ -466,7 +473,7 @@ def test_the_collector_is_eased_while_tasks_run_and_as_before_after(tmp_path, mo
         dla.run_sweep(parse_spec(TINY_SPEC), client=dask_client, out=tmp_path / "t.nc")
     # A failed sweep's tasks may still run on a shared cluster after it returns: its first batch ran frozen.
     during = frozen[:1] if fails else frozen
-    assert during and all(count > 0 and young == sweep.COLLECT_EVERY for count, young in during)
+    assert during and all(count > 0 and young == session.COLLECT_EVERY for count, young in during)
     assert gc.get_freeze_count() == 0 and gc.get_threshold() == thresholds
 
 
@@ -475,7 +482,7 @@ def test_a_collector_switched_off_stays_off_during_a_sweep():
     thresholds = gc.get_threshold()
     gc.set_threshold(0, *thresholds[1:])
     try:
-        with sweep._collector_eased():
+        with session.collector_eased():
             assert gc.get_threshold()[0] == 0 and gc.get_freeze_count() > 0
         assert gc.get_threshold()[0] == 0
     finally:

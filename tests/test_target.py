@@ -8,9 +8,9 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import science
-from dlasweep import sweep
-from dlasweep.analysis import summarise
-from dlasweep.spec import DEFAULT_MAX_SEEDS, SpecError, parse_spec
+from dlasweep.stats.summary import summarise
+from dlasweep.sweep import precision
+from dlasweep.sweep.spec import DEFAULT_MAX_SEEDS, SpecError, parse_spec
 from test_sweep import Interrupt, interrupt_after, record_writes
 
 FIRST = 4
@@ -53,7 +53,7 @@ def reached(dask_client):
 def test_the_target_is_reached_and_the_result_is_a_fixed_sweep(reached, dask_client):
     ds, _ = reached
     n = ds.sizes["seed"]
-    assert ds.attrs["stop_reason"] == sweep.TARGET_REACHED and FIRST < n < 32
+    assert ds.attrs["stop_reason"] == precision.TARGET_REACHED and FIRST < n < 32
     assert ds.attrs["target_ci"] == TARGET and ds.attrs["max_seeds"] == 32
     assert (ds["D_ci_half_width"] <= TARGET).all()
     fixed = dla.run_sweep(parse_spec(spec_text(seeds=n, run="")), client=dask_client)
@@ -77,7 +77,7 @@ def test_later_batches_grow_only_new_replicates(reached):
 
 def test_an_unreachable_target_stops_at_max_seeds(dask_client):
     ds = dla.run_sweep(parse_spec(spec_text(run="target_ci = 1e-4\nmax_seeds = 8")), client=dask_client)
-    assert ds.sizes["seed"] == 8 and ds.attrs["stop_reason"] == sweep.CAP_REACHED
+    assert ds.sizes["seed"] == 8 and ds.attrs["stop_reason"] == precision.CAP_REACHED
     assert not (ds["D_ci_half_width"] <= 1e-4).all()
 
 
@@ -99,7 +99,7 @@ def test_a_killed_target_sweep_resumes_to_the_same_result(tmp_path, dask_client,
     assert resumed_writes and sorted(before + resumed_writes) == sorted(written)
     xr.testing.assert_identical(science(resumed), science(ds))
     xr.testing.assert_identical(resumed["D_ci_half_width"], ds["D_ci_half_width"])
-    assert resumed.attrs["stop_reason"] == sweep.TARGET_REACHED and resumed.attrs["max_seeds"] == 64
+    assert resumed.attrs["stop_reason"] == precision.TARGET_REACHED and resumed.attrs["max_seeds"] == 64
     assert {"units", "long_name"} <= set(resumed["D_ci_half_width"].attrs)
     assert not out.with_name("target.nc.parts").exists()
     resumed.close()
@@ -110,25 +110,39 @@ def test_failed_tasks_stop_the_batches_until_resume_retries_them(tmp_path, dask_
     out = tmp_path / "target.nc"
     with pytest.warns(RuntimeWarning, match="2 of 8 tasks failed"):
         failed = dla.run_sweep(parse_spec(spec_text()), client=dask_client, out=out)
-    assert failed.sizes["seed"] == FIRST and failed.attrs["stop_reason"] == sweep.TASKS_FAILED
+    assert failed.sizes["seed"] == FIRST and failed.attrs["stop_reason"] == precision.TASKS_FAILED
     failed.close()
     monkeypatch.undo()
     healed = dla.run_sweep(parse_spec(spec_text()), client=dask_client, out=out, resume=True)
     xr.testing.assert_identical(science(healed), science(reached[0]))
-    assert healed.attrs["stop_reason"] == sweep.TARGET_REACHED
+    assert healed.attrs["stop_reason"] == precision.TARGET_REACHED
     healed.close()
 
 
 def test_the_next_batch_follows_the_worst_configuration():
     spec = parse_spec(spec_text(run="target_ci = 0.01\nmax_seeds = 100"))
-    more = sweep._more_seeds
-    assert more(spec, 8, np.array([0.005, 0.01]), []) == (None, sweep.TARGET_REACHED)
+    more = precision.more_seeds
+    assert more(spec, 8, np.array([0.005, 0.01]), []) == (None, precision.TARGET_REACHED)
     assert more(spec, 8, np.array([0.005, 0.02]), []) == (math.ceil(1.1 * 8 * 4), None)
     assert more(spec, 8, np.array([0.005, 0.0101]), []) == (8 + FIRST, None)  # at least one first batch
     assert more(spec, 8, np.array([0.005, np.nan]), []) == (16, None)  # no interval yet: twice the seeds
     assert more(spec, 8, np.array([0.005, 1.0]), []) == (100, None)
-    assert more(spec, 100, np.array([0.005, 1.0]), []) == (None, sweep.CAP_REACHED)
-    assert more(spec, 8, np.array([0.005, 0.02]), [("task-0-0-1", "boom")]) == (None, sweep.TASKS_FAILED)
+    assert more(spec, 100, np.array([0.005, 1.0]), []) == (None, precision.CAP_REACHED)
+    assert more(spec, 8, np.array([0.005, 0.02]), [("task-0-0-1", "boom")]) == (None, precision.TASKS_FAILED)
+
+
+def test_precision_asks_for_batches_until_told_the_target_is_met(monkeypatch):
+    # ask/tell by hand, no dask: the half-widths the summary would measure are given
+    spec = parse_spec(spec_text(run="target_ci = 0.01\nmax_seeds = 100"))
+    told = iter([np.array([0.005, 0.02]), np.array([0.005, 0.009])])
+    monkeypatch.setattr(precision, "ci_half_width", lambda ds: xr.DataArray(next(told)))
+    seeds = precision.Precision(spec)
+    assert seeds.ask() is spec
+    assert len(seeds.tell(None, []).seeds) == math.ceil(1.1 * FIRST * 4) == len(seeds.ask().seeds)
+    assert seeds.tell(None, []) is None and seeds.ask() is None and seeds.reason == precision.TARGET_REACHED
+    np.testing.assert_array_equal(seeds.half_width, [0.005, 0.009])
+    fixed = precision.Precision(parse_spec(spec_text(run="")))  # no target: one batch, the spec
+    assert fixed.tell(None, []) is None and fixed.reason is None and fixed.half_width is None
 
 
 def test_target_keys_parse_and_leave_the_digest_alone():

@@ -1,15 +1,15 @@
-"""The worker's task (dlasweep/task.py): a batch is what growing and measuring each cluster alone gives, and a
+"""The worker's task (dlasweep/sweep/task.py): a batch is what growing and measuring each cluster alone gives, and a
 failure stays with its own cluster."""
 
 import numpy as np
 
 import dlasweep as dla
 from conftest import TINY_SPEC
-from dlasweep import measure
-from dlasweep import task as worker
-from dlasweep.fit import growth_counts
+from dlasweep.measures import shape as measure
 from dlasweep.params import Status
-from dlasweep.spec import parse_spec
+from dlasweep.stats.fit import growth_counts
+from dlasweep.sweep import task as worker
+from dlasweep.sweep.spec import parse_spec
 
 
 def tiny():
@@ -30,7 +30,8 @@ def test_a_batch_is_what_grow_and_the_measures_give_one_by_one():
             np.testing.assert_array_equal(result[name], values, err_msg=name)
         np.testing.assert_array_equal(result["n_grown"], prefix)
         np.testing.assert_array_equal(result["walk_steps"], np.cumsum(cluster.steps)[prefix - 1])
-        np.testing.assert_array_equal(result["status"], np.where(counts <= cluster.n, Status.ok, Status[cluster.status]))
+        np.testing.assert_array_equal(result["status"],
+                                      np.where(counts <= cluster.n, Status.ok, Status[cluster.status]))
         np.testing.assert_array_equal(result["points"], cluster.points if keep else cluster.points[:0])
         np.testing.assert_array_equal(result["parent"], cluster.parents if keep else cluster.parents[:0])
         assert str(result["error"]) == ""

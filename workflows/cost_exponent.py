@@ -14,8 +14,8 @@ swap the cores. Both sides time CPU seconds of ``grow`` after a warm-up
 
 and its steps' part the same with the mean steps a particle. It writes
 ``cost_exponent.csv`` (a row per round and model, as each ends) and ``cost_exponent.md``
-(each round's exponent, their mean and ``dlasweep.bench_targets.TARGETS``'
-target, and the host's memory before and after the rounds, ``dlasweep.host``)
+(each round's exponent, their mean and ``dlasweep.bench.targets.TARGETS``'
+target, and the host's memory before and after the rounds, ``dlasweep.bench.host``)
 into the output folder. Needs two cores (Linux: it pins the sides).
 """
 
@@ -32,8 +32,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from dlasweep.bench_targets import MODELS, SCALING, TARGETS
-from dlasweep.host import latency_line, read_latency
+from dlasweep.bench.host import latency_line, read_latency
+from dlasweep.bench.targets import MODELS, SCALING, TARGETS
 
 _SIDE = """
 import json, os, sys, time
@@ -101,7 +101,7 @@ def _label(n: float) -> str:
 
 def summary(rows: list[dict], command: str, hosts: dict | None = None) -> str:
     """A markdown table: each model's rounds, their mean and its target; under it the host's
-    memory (``dlasweep.host.read_latency``) as measured at each of ``hosts``' moments."""
+    memory (``dlasweep.bench.host.read_latency``) as measured at each of ``hosts``' moments."""
     lines = [f"`{command}`", "",
              "| model | N | rounds: cost exponent (steps' part) | mean | target |", "|---|---|---|---|---|"]
     for name in dict.fromkeys(row["model"] for row in rows):
@@ -123,7 +123,7 @@ def summary(rows: list[dict], command: str, hosts: dict | None = None) -> str:
 
 def main(argv=None) -> None:
     parser = _Parser(description=__doc__.splitlines()[0])
-    parser.add_argument("--models", nargs="+", default=list(MODELS), help="models of dlasweep.bench_targets.MODELS")
+    parser.add_argument("--models", nargs="+", default=list(MODELS), help="models of dlasweep.bench.targets.MODELS")
     parser.add_argument("--n", type=float, default=SCALING[1], help="the long cluster's N")
     parser.add_argument("--short", type=float, default=SCALING[0], help="the short clusters' N")
     parser.add_argument("--rounds", type=int, default=2, help="rounds, cores swapped each round")

@@ -8,7 +8,7 @@ the same model: unit disks, one random walker at a time, exact contact. Point
 ``fastDLA.hpp``); the script compiles it into a temporary folder with
 ``g++ --std=gnu++11 -O3 -march=native`` and copies, vendors or downloads
 nothing. Each round runs, in turn and each in a fresh single-threaded
-process, our kernel (``dlasweep.bench.probe``: seconds of ``grow`` with
+process, our kernel (``dlasweep.bench.benchmark.probe``: seconds of ``grow`` with
 compilation excluded, peak resident memory of the process and the part that
 growth added) and ``fastDLA N '' SEED`` (an empty file name writes nothing:
 wall seconds of the whole process and its peak resident memory, from
@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from dlasweep.bench import probe
+from dlasweep.bench.benchmark import probe
 
 OFFLATTICE_2D = {"model": "offlattice", "dim": 2}
 COUNTS = [100_000, 1_000_000]
@@ -59,7 +59,8 @@ def build(checkout: Path, into: Path) -> Path:
 def version(checkout: Path) -> str:
     """The checkout's git commit, else a hash of its two source files."""
     try:
-        out = subprocess.run(["git", "-C", str(checkout), "rev-parse", "HEAD"], check=False, capture_output=True, text=True)
+        out = subprocess.run(["git", "-C", str(checkout), "rev-parse", "HEAD"], check=False, capture_output=True,
+                             text=True)
         if out.returncode == 0:
             return "commit " + out.stdout.strip()
     except OSError:
@@ -84,7 +85,7 @@ def run_fastdla(binary: Path, n: int, seed: int) -> dict:
 
 
 def run_ours(n: int, seed: int) -> dict:
-    """Grow one 2D off-lattice cluster of ``n`` in a fresh process (``dlasweep.bench.probe``)."""
+    """Grow one 2D off-lattice cluster of ``n`` in a fresh process (``dlasweep.bench.benchmark.probe``)."""
     r = probe(OFFLATTICE_2D, n, seed=seed)
     if r["n_grown"] != n:
         raise RuntimeError(f"dlasweep grew {r['n_grown']} of {n} particles ({r['status']})")

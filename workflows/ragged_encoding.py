@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 
 import dlasweep as dla
-from dlasweep import ragged, store
-from dlasweep.spec import parse_spec
+from dlasweep.data import netcdf as store
+from dlasweep.data import ragged
+from dlasweep.sweep.spec import parse_spec
 
 
 def main(argv=None):

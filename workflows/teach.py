@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import dlasweep as dla
-from dlasweep.pictures import draw_cluster
+from dlasweep.reporting.pictures import draw_cluster
 
 MODELS = {"lattice": "square lattice", "offlattice": "disks, off the lattice"}
 
@@ -45,7 +45,8 @@ D_2D = 1.708
 
 
 def checked(n, seed, output) -> Path:
-    """The output folder, created, once ``n`` and ``seed`` are found fit for the lesson; ValueError naming what is not."""
+    """The output folder, created, once ``n`` and ``seed`` are found fit for the lesson; ValueError naming
+    what is not."""
     if not 2_000 <= n <= 1_000_000:
         raise ValueError(f"-n: {n} is not in [2000, 1000000] (fewer leave no decade to fit)")
     if seed < 0:

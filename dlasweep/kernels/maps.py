@@ -117,7 +117,8 @@ def _unreserved(nbytes):
     A grid spans the cluster's bounding cube, and a plain allocation of it is refused once it exceeds the
     machine's memory (``MemoryError`` from numba's allocator), though its written pages are a small part:
     a large 3D lattice cluster's grid holds more words than a machine has memory (the case that
-    showed it: docs/performance.md). Where overcommit is strict (``vm.overcommit_memory`` 2) Linux counts such a mapping all the same.
+    showed it: docs/performance.md). Where overcommit is strict (``vm.overcommit_memory`` 2) Linux counts
+    such a mapping all the same.
     Called from the kernels in object mode; the array keeps the mapping, unmapped when numba drops its
     last reference.
     """

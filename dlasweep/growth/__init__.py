@@ -1,0 +1,1 @@
+"""Growing one cluster: ``Cluster``, ``grow`` and ``grow_many`` over the numba kernels."""

@@ -1,0 +1,1 @@
+"""Ensembles of clusters: fits, bootstrap intervals, extrapolation, branch statistics, the summary."""
