@@ -72,12 +72,12 @@ def _cell(text) -> str:
 
 def parameters_md() -> str:
     params = _module("dlasweep.growth.params", "dlasweep.params")
-    lines = ["| name | default | allowed values | meaning |", "|---|---|---|---|"]
+    lines = ["| name | default | allowed values | kind | meaning |", "|---|---|---|---|---|"]
     for name, par in params.PARAMETERS.items():
         meaning = f"{par.meaning}; {par.note}" if par.note else par.meaning
         kind = "method" if par.shortcut else "model"
-        lines.append(f"| `{name}` | `{params.shown_default(name)}` | {_cell(params.allowed(name))} | "
-                     f"{_cell(meaning)} ({kind}) |")
+        lines.append(f"| `{name}` | `{params.shown_default(name)}` | {_cell(params.allowed(name))} | {kind} | "
+                     f"{_cell(meaning)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -128,8 +128,18 @@ def lesson_ipynb() -> str:
         f"On this page the lesson runs at n = {LESSON_N:,} particles, seed {LESSON_SEED}, so that the "
         "documentation builds in seconds: the pictures and numbers below come from that run. The "
         "lesson's own size, 50,000, gives the fits a wider range of n.")
-    small = nbformat.v4.new_code_cell(f"import tempfile\nn, seed, output = {LESSON_N}, {LESSON_SEED}, "
-                                      "tempfile.mkdtemp(prefix='lesson-')")
+    small = nbformat.v4.new_code_cell(f"n, seed, output = {LESSON_N}, {LESSON_SEED}, 'lesson-output'")
+    # The cell of helpers (the command line, the plot) after the parameters: folded, the lesson reads on.
+    helpers = nb.cells[at + 1]
+    if helpers.cell_type == "code":
+        helpers.metadata.setdefault("tags", []).append("hide-input")
+    # The lesson writes its plot of both measurements to a file; the page shows it below the cell that drew it.
+    plot = next((k for k, cell in enumerate(nb.cells) if "plot_dimensions(results" in cell.source), None)
+    if plot is not None:
+        show = nbformat.v4.new_code_cell("from IPython.display import Image\n"
+                                         "Image(filename=str(Path(output) / 'dimension.png'))")
+        show.metadata["tags"] = ["remove-input"]
+        nb.cells.insert(plot + 1, show)
     # papermill's convention: the cell after the one tagged "parameters" sets them anew
     nb.cells[at + 1:at + 1] = [note, small]
     nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
