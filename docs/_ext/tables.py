@@ -19,6 +19,7 @@ A file is rewritten only when its text changes, so that Sphinx rereads only what
 from __future__ import annotations
 
 import importlib
+import shutil
 from pathlib import Path
 
 from sphinx.errors import ExtensionError
@@ -31,6 +32,8 @@ LESSON_N = 2000
 """Particles of each cluster when the docs run the lesson: its smallest size (teach.py refuses fewer, which
 leave no decade to fit), so the build takes seconds once the kernels are compiled."""
 LESSON_SEED = 1
+LESSON_OUTPUT = "lesson-output"
+"""The lesson's output folder, in docs/_generated/ (where myst-nb runs it), emptied before each build."""
 
 # What each key of a spec's [grid] and [run] tables means (the [model] keys are the parameters, from their
 # table). The build fails when the spec's key lists and these disagree, so a new key cannot go unwritten.
@@ -128,18 +131,21 @@ def lesson_ipynb() -> str:
         f"On this page the lesson runs at n = {LESSON_N:,} particles, seed {LESSON_SEED}, so that the "
         "documentation builds in seconds: the pictures and numbers below come from that run. The "
         "lesson's own size, 50,000, gives the fits a wider range of n.")
-    small = nbformat.v4.new_code_cell(f"n, seed, output = {LESSON_N}, {LESSON_SEED}, 'lesson-output'")
+    small = nbformat.v4.new_code_cell(f"n, seed, output = {LESSON_N}, {LESSON_SEED}, {LESSON_OUTPUT!r}")
     # The cell of helpers (the command line, the plot) after the parameters: folded, the lesson reads on.
     helpers = nb.cells[at + 1]
     if helpers.cell_type == "code":
         helpers.metadata.setdefault("tags", []).append("hide-input")
     # The lesson writes its plot of both measurements to a file; the page shows it below the cell that drew it.
-    plot = next((k for k, cell in enumerate(nb.cells) if "plot_dimensions(results" in cell.source), None)
-    if plot is not None:
-        show = nbformat.v4.new_code_cell("from IPython.display import Image\n"
-                                         "Image(filename=str(Path(output) / 'dimension.png'))")
-        show.metadata["tags"] = ["remove-input"]
-        nb.cells.insert(plot + 1, show)
+    plot = [k for k, cell in enumerate(nb.cells) if cell.cell_type == "code" and "dimension.png" in cell.source
+            and "def " not in cell.source]
+    if len(plot) != 1:
+        raise ExtensionError(f"docs/_ext/tables.py: {TEACH.name} has {len(plot)} cells drawing dimension.png, "
+                             "not one: say which cell the page should show the plot after")
+    show = nbformat.v4.new_code_cell("from IPython.display import Image\n"
+                                     "Image(filename=str(Path(output) / 'dimension.png'))")
+    show.metadata["tags"] = ["remove-input"]
+    nb.cells.insert(plot[0] + 1, show)
     # papermill's convention: the cell after the one tagged "parameters" sets them anew
     nb.cells[at + 1:at + 1] = [note, small]
     nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
@@ -156,6 +162,7 @@ def _write(name: str, text: str):
 
 def generate(app=None):
     GENERATED.mkdir(exist_ok=True)
+    shutil.rmtree(GENERATED / LESSON_OUTPUT, ignore_errors=True)  # the lesson's pictures: this build's alone
     _write("parameters.md", parameters_md())
     _write("spec_keys.md", spec_keys_md())
     _write("dataset.md", dataset_md())
