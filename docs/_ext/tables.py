@@ -38,14 +38,14 @@ LESSON_OUTPUT = "lesson-output"
 # What each key of a spec's [grid] and [run] tables means (the [model] keys are the parameters, from their
 # table). The build fails when the spec's key lists and these disagree, so a new key cannot go unwritten.
 SPEC_KEYS = {
-    ("", "name"): ("the spec's file name", "The sweep's name, in the dataset's title and the report."),
+    ("", "name"): ("the file's name without `.toml`", "The sweep's name, in the dataset's title and the report."),
     ("grid", "size"): ("`[0]`", "Box sides, in lattice spacings (particle diameters off the lattice); 0 is "
                                 "unbounded. A list: one more axis of the sweep."),
     ("grid", "n_particles"): ("required", "Particle counts at which each cluster is measured. Each cluster is "
                                           "grown once, to the largest; the smaller counts are its prefixes."),
-    ("grid", "seeds"): ("required", "A count (replicates 0, 1, ..., n-1) or a list of replicate numbers. With "
+    ("grid", "seeds"): ("1", "A count (replicates 0, 1, ..., n-1) or a list of replicate numbers. With "
                                     "`target_ci`, a count: the first batch."),
-    ("run", "root_seed"): ("required", "Every cluster's random stream derives from it and the cluster's grid "
+    ("run", "root_seed"): ("0", "Every cluster's random stream derives from it and the cluster's grid "
                                        "indices, so results do not depend on the workers or the order tasks end."),
     ("run", "workers"): ("the cores", "Threads of the embedded dask cluster."),
     ("run", "target_ci"): ("none", "Add seeds, batch after batch, until the 95% interval of the headline D at the "
@@ -99,8 +99,8 @@ def spec_keys_md() -> str:
         default, meaning = SPEC_KEYS[section, key]
         lines.append(f"| {f'`[{section}]`' if section else '(top)'} | `{key}` | {default} | {meaning} |")
     for name, par in params.PARAMETERS.items():
-        lines.append(f"| `[model]` | `{name}` | `{params.shown_default(name)}` | {_cell(par.meaning)}: "
-                     f"{_cell(params.allowed(name))} |")
+        lines.append(f"| `[model]` | `{name}` | `{params.shown_default(name)}` | {_cell(par.meaning)} "
+                     f"(allowed: {_cell(params.allowed(name))}) |")
     return "\n".join(lines) + "\n"
 
 
