@@ -1,7 +1,7 @@
 PY := .venv/bin/python
 STAMP := .venv/.installed
 
-.PHONY: sweep example test test-slurm bench clean distclean
+.PHONY: sweep example test test-slurm bench clean distclean docs
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -38,3 +38,7 @@ clean:
 # clean, and the venv.
 distclean: clean
 	rm -rf .venv
+
+# The documentation site, into docs/_build/html (its tables made from the package's, the lesson run at a small n).
+docs: $(STAMP)
+	$(PY) -m sphinx -b html docs docs/_build/html
