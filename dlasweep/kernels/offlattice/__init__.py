@@ -71,8 +71,8 @@ Memory: besides the points (16 or 24 bytes each), the diffusion times (4),
 the parents (4), the cell-list links (4) and in 3D the attachment number of
 each stored row (4: the rows are kept cell after cell, ``celllist.sort_cells``
 and ``celllist.sort_tail``, so that a gather reads a cell's particles from a stretch or two;
-``sort_tail`` holds 12 bytes a row attached since the last full sort, a fifth at most), the grids take about a bit per unit cell
-(maps), a byte per cell of side ``2**FS`` (centre field) and 4 bytes per tile of
+``sort_tail`` holds 12 bytes a row attached since the last full sort, a fifth at most), the grids take
+about a bit per unit cell (maps), a byte per cell of side ``2**FS`` (centre field) and 4 bytes per tile of
 64 cell-list cells (directory) over a square ``GROW`` times the cluster's
 extent, and 256 bytes per tile that holds particles. When the cluster
 outgrows them they are dropped, and the larger ones built in the walk

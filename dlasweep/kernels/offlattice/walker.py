@@ -95,8 +95,9 @@ def release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
 
 
 @borrow
-def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li,
-                    mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field, pstart, geo, rs, rng):
+def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor,
+                    lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads,
+                    field, pstart, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
 
     One walker at a time, released (``release``) and walked to contact; a
