@@ -1,0 +1,1 @@
+"""Measures of one point set, no I/O."""

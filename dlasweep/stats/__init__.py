@@ -1,0 +1,1 @@
+"""Statistics: fits, intervals, ensembles."""
