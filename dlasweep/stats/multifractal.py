@@ -20,7 +20,11 @@ honesty rules are those of the box-counting dimension:
   sums: where those of all the counts and of half of them differ by more than
   ``tolerance`` (in log Z / (q - 1)), too few counts fall in a box, and the
   smaller sides are left out (the sums of a finite sample are biased there:
-  small boxes look emptier or lumpier than they are);
+  small boxes look emptier or lumpier than they are); for q < 1, where the
+  boxes no count reached weigh in, also where they may be more than a
+  fraction ``tolerance`` of those reached (Chao's estimate of the unseen, from
+  the boxes of one and two counts): a sample's support grows too slowly with
+  its size for the halves to show it;
 - within that range, the widest flat window of ``min_decades`` is fitted
   (``fit``: the window, its statistical and systematic error, ``ok`` only when
   it is flat);
@@ -38,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import MIN_DECADES
-from ..fit import Z95, Fit, _line, _scaling_fit
+from ..fit import Z95, Fit, _line, _local_slopes, _scaling_fit, _window
 
 DEFAULT_Q = np.arange(0.0, 6.01, 0.5)
 """The q of a spectrum unless told: from 0 to 6 by halves."""
@@ -64,7 +68,7 @@ class Spectrum:
         95% intervals, ``D -+ 1.96 stderr``.
     alpha, alpha_err, f, f_err : ndarray
         The direct method's alpha(q) and f(q) over D(q)'s window, with standard errors
-        (regression and jackknife in quadrature).
+        (the fit's, statistical and systematic, and the jackknife's in quadrature).
     ok : ndarray of bool
         Whether D(q) is trusted: a flat fitted window of ``min_decades`` within the sides the counts resolve.
     reasons : tuple of str
@@ -109,11 +113,14 @@ def _sides(extent, min_scale):
 
 def _sums(points, weights, sides, q):
     """The shift-averaged sums at each side for each weight column: log Z(q) / (q - 1)
-    (sum p log p at q = 1), sum mu log p and sum mu log mu; each (sides, q, columns)."""
+    (sum p log p at q = 1), sum mu log p and sum mu log mu, each (sides, q, columns); and for the
+    first column (whole counts) at each side, log(1 + n1**2 / (2 n2 N)): the boxes no count reached,
+    as Chao's estimate (n1 and n2 boxes hold one and two counts, N any) adds them to those it did."""
     lo = points.min(axis=0)
     columns = weights.shape[1]
     shape = (len(sides), len(q), columns)
     Z, H, A, F = (np.zeros(shape) for _ in range(4))
+    unseen = np.zeros(len(sides))
     total = weights.sum(axis=0)
     for j, s in enumerate(sides):
         for t in range(SHIFTS):
@@ -121,7 +128,10 @@ def _sums(points, weights, sides, q):
             span = cells.max(axis=0) + 1
             key = np.ravel_multi_index(cells.T, span)
             _, inverse = np.unique(key, return_inverse=True)
-            boxes = np.stack([np.bincount(inverse, weights[:, c]) for c in range(columns)], axis=1) / total
+            boxes = np.stack([np.bincount(inverse, weights[:, c]) for c in range(columns)], axis=1)
+            n1, n2 = (boxes[:, 0] == 1).sum(), (boxes[:, 0] == 2).sum()
+            unseen[j] += np.log1p(n1 * n1 / (2.0 * max(n2, 1) * len(boxes))) / SHIFTS
+            boxes /= total
             held = boxes > 0
             logp = np.log(np.where(held, boxes, 1.0))
             for k, qk in enumerate(q):
@@ -135,7 +145,7 @@ def _sums(points, weights, sides, q):
     one = np.isclose(q, 1.0)
     with np.errstate(divide="ignore"):
         Y = np.where(one[None, :, None], H, np.log(Z) / np.where(one, 1.0, q - 1.0)[None, :, None])
-    return Y, A, F
+    return Y, A, F, unseen
 
 
 def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float = 2.0, max_fraction: float = 0.25,
@@ -202,7 +212,10 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
     extent = float((points.max(axis=0) - points.min(axis=0)).max()) + 1.0
     sides = _sides(max_fraction * extent, min_scale)
     sides = sides[sides <= max_fraction * extent * (1 + 1e-9)]
-    Y, A, F = _sums(points, weights, sides, q) if len(sides) else (np.zeros((0, nq, 2 + groups)),) * 3
+    if len(sides):
+        Y, A, F, unseen = _sums(points, weights, sides, q)
+    else:
+        Y, A, F, unseen = (np.zeros((0, nq, 2 + groups)),) * 3 + (np.zeros(0),)
     x = np.log(sides)
     out = {k: np.full(nq, np.nan) for k in ("D", "err", "alpha", "aerr", "f", "ferr", "lo", "hi")}
     ok = np.zeros(nq, bool)
@@ -210,6 +223,8 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
     for k in range(nq):
         y, half = Y[:, k, 0], Y[:, k, 1]
         good = np.isfinite(y) & np.isfinite(half) & (np.abs(half - y) <= tolerance)
+        if q[k] < 1:  # boxes no count reached weigh in: as many as the counts leave unseen, at most
+            good &= unseen <= tolerance
         # the sides from the largest down, as far as each one is resolved
         first = len(sides)
         while first > 0 and good[first - 1]:
@@ -240,11 +255,13 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         err = np.sqrt(fit.stderr ** 2 + jackknife(Y[:, k]) ** 2 + bias ** 2)
         out["D"][k], out["err"][k] = fit.D, err
         out["lo"][k], out["hi"][k] = fit.range_lo, fit.range_hi
+        a, b = np.flatnonzero(window)[[0, -1]] + [0, 1]
         for name, V in (("alpha", A), ("f", F)):
-            value, regression = _line(xw, V[window, k, 0])
-            out[name][k] = value
-            out["aerr" if name == "alpha" else "ferr"][k] = np.sqrt(np.nan_to_num(regression) ** 2
-                                                                   + jackknife(V[:, k]) ** 2)
+            # the fit's errors over D's window (statistical, and half the change of the local slope)
+            same = np.zeros(len(x), np.int64)
+            w = _window(x, V[:, k, 0], x, same, 1.0, _local_slopes(x, V[:, k, 0], x, same), a, b, flat_tolerance)
+            out[name][k] = w.D
+            out["aerr" if name == "alpha" else "ferr"][k] = np.hypot(w.stderr, jackknife(V[:, k]))
         ok[k] = fit.ok
     D, err = out["D"], out["err"]
     return Spectrum(q, D, err, D - Z95 * err, D + Z95 * err, out["alpha"], out["aerr"], out["f"], out["ferr"], ok,
