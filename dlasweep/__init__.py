@@ -19,7 +19,8 @@ _LAZY = {"Cluster": "grow", "grow": "grow", "box_counts": "boxes", "radius_of_gy
          "fit_dimension": "fit", "fit_mass_radius": "fit", "load_spec": "spec",
          "run_sweep": "sweep", "open_sweep": "store", "cluster_points": "ragged", "cluster_parents": "ragged",
          "read_cluster": "ragged", "export_cluster": "export",
-         "summarise": "analysis", "report": "report"}
+         "summarise": "analysis", "report": "report",
+         "harmonic_measure": "measures.harmonic", "multifractal_spectrum": "stats.multifractal"}
 
 
 class _Package(types.ModuleType):
@@ -103,6 +104,8 @@ __all__ = [
     "cluster_parents",
     "read_cluster",
     "export_cluster",
+    "harmonic_measure",
+    "multifractal_spectrum",
     "report",
     "__version__",
 ]

@@ -8,8 +8,8 @@ of log Z / (q - 1) on log s (of sum_i p_i log p_i at q = 1, the information
 dimension). The direct method of Chhabra and Jensen (Phys. Rev. Lett. 62,
 1327, 1989) reads the spectrum from the same boxes: with mu_i = p_i**q / Z,
 alpha(q) is the slope of sum_i mu_i log p_i and f(q) that of sum_i mu_i log mu_i.
-Each sum is averaged over ``SHIFTS`` grids shifted along the diagonal by a
-fraction of the side.
+The grids of sides b, 2b, 4b, ... (a family) nest, and the fit gives each
+family its own intercept (``fit``: box counting's rule).
 
 It lives with the statistics, not with the measures of one point set, because
 what it returns is a fit with an error bar (``fit``'s scaling fit), whose
@@ -42,14 +42,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import MIN_DECADES
-from ..fit import Z95, Fit, _line, _local_slopes, _scaling_fit, _window
+from ..boxes import default_scales
+from ..fit import Z95, Fit, _families, _line, _local_slopes, _scaling_fit, _window
 
 DEFAULT_Q = np.arange(0.0, 6.01, 0.5)
 """The q of a spectrum unless told: from 0 to 6 by halves."""
 GROUPS = 16
 """Parts of the counts for the jackknife."""
-SHIFTS = 4
-"""Grids per side, shifted by 0, 1/4, 1/2 and 3/4 of the side along the diagonal, whose sums are averaged."""
+SHIFTS = 1
+"""Grids per side, shifted by 0, 1/SHIFTS, ... of the side along the diagonal, whose sums are averaged: one, its corner
+at the lowest point, as a grid shifted within a filled region cuts boxes at its edges (a filled square's D(1) came out 1.93 with four)."""
 PER_OCTAVE = 4
 """Box sides per factor of two."""
 
@@ -106,9 +108,10 @@ class Spectrum:
 
 
 def _sides(extent, min_scale):
-    """Box sides from ``min_scale`` up to ``extent``, ``PER_OCTAVE`` to a factor of two."""
-    top = int(np.ceil(np.log2(max(extent, min_scale) / min_scale) * PER_OCTAVE))
-    return min_scale * 2.0 ** (np.arange(top + 1) / PER_OCTAVE)
+    """Whole box sides from ``min_scale`` up to ``extent``, ``PER_OCTAVE`` to a factor of two
+    (``boxes.default_scales``: families b, 2b, 4b, ... whose grids nest)."""
+    sides = default_scales(extent, PER_OCTAVE)
+    return sides[(sides >= min_scale) & (sides <= extent)]
 
 
 def _sums(points, weights, sides, q):
@@ -217,6 +220,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
     else:
         Y, A, F, unseen = (np.zeros((0, nq, 2 + groups)),) * 3 + (np.zeros(0),)
     x = np.log(sides)
+    families = _families(tuple(sides))
     out = {k: np.full(nq, np.nan) for k in ("D", "err", "alpha", "aerr", "f", "ferr", "lo", "hi")}
     ok = np.zeros(nq, bool)
     reasons, fits = [], []
@@ -230,7 +234,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         while first > 0 and good[first - 1]:
             first -= 1
         keep = slice(first, len(sides))
-        fit = _scaling_fit(x[keep], y[keep], sides[keep], np.zeros(len(sides) - first, np.int64), 1.0,
+        fit = _scaling_fit(x[keep], y[keep], sides[keep], families[keep], 1.0,
                            min_decades=min_decades, min_points=min_points, flat_tolerance=flat_tolerance,
                            unit="box side")
         if first > 0 and not fit.ok:
@@ -245,7 +249,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         xw = x[window]
 
         def slope(v):
-            return _line(xw, v[window])[0]
+            return _line(xw, v[window], families[window])[0]
 
         def jackknife(V):
             loo = np.array([slope(V[:, 2 + g]) for g in range(groups)])
@@ -258,8 +262,8 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         a, b = np.flatnonzero(window)[[0, -1]] + [0, 1]
         for name, V in (("alpha", A), ("f", F)):
             # the fit's errors over D's window (statistical, and half the change of the local slope)
-            same = np.zeros(len(x), np.int64)
-            w = _window(x, V[:, k, 0], x, same, 1.0, _local_slopes(x, V[:, k, 0], x, same), a, b, flat_tolerance)
+            w = _window(x, V[:, k, 0], x, families, 1.0, _local_slopes(x, V[:, k, 0], x, families), a, b,
+                        flat_tolerance)
             out[name][k] = w.D
             out["aerr" if name == "alpha" else "ferr"][k] = np.hypot(w.stderr, jackknife(V[:, k]))
         ok[k] = fit.ok
