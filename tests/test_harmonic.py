@@ -232,3 +232,8 @@ def test_dla_makarov_and_halsey():
     assert abs(s.D[1] - d0.D / 2) <= Z95 * np.hypot(s.stderr[1], d0.stderr / 2), (s.D[1], s.stderr[1], d0.D)
     mean, spread = h.depth
     assert 0.5 < mean < 1 and 0 < spread < 0.5
+
+
+def test_public():
+    assert dla.harmonic_measure is harmonic_measure and dla.multifractal_spectrum is multifractal_spectrum
+    assert {"harmonic_measure", "multifractal_spectrum"} <= set(dir(dla))

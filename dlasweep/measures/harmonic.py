@@ -101,7 +101,13 @@ def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     Walkers come in blocks of ``kernels.harmonic.BLOCK``, block b from the stream
     ``SeedSequence(seed, spawn_key=(KEY, b))``: the first k walkers of a
     measurement are those of any larger one with the same seed, and blocks
-    walked apart (``blocks``) give the same walkers.
+    walked apart (``blocks``, ``kernels.harmonic.frozen_walks``) give the same
+    walkers, so that a measurement can be shared between workers.
+
+    A model of many walkers at once (``walkers > 1`` in its parameters) is
+    measured with walkers released one at a time, as its single walker would
+    be: against a frozen cluster its walkers do not meet. A walker that spends
+    the model's ``max_steps`` moves ends the measurement (``status``).
 
     Parameters
     ----------
@@ -116,6 +122,7 @@ def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     -------
     HarmonicMeasure
     """
+    from ..grow import _waited
     from ..kernels.harmonic import frozen_walks
 
     if not _params.is_integer(walkers) or walkers < 1:
@@ -128,7 +135,8 @@ def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     p = _params.resolve(**cluster.params)
     walkers, seed = int(walkers), int(seed)
     start = time.perf_counter()
-    touched, where, steps, code = frozen_walks(points, p, blocks(seed, walkers), walkers)
+    # in a thread while this one waits, as growth's kernels run: Ctrl-C reaches the caller at once
+    touched, where, steps, code = _waited(lambda: frozen_walks(points, p, blocks(seed, walkers), walkers))
     seconds = time.perf_counter() - start
     line = p["seed_shape"] == "line"
     x = points.astype(np.float64)
