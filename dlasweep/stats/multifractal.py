@@ -79,6 +79,9 @@ class Spectrum:
         Each q's fitted window of box sides.
     fits : tuple of Fit
         Each q's fit of D (``fit.Fit``), its error before the jackknife and the bias were added.
+    sampling, bias : ndarray
+        The parts of ``stderr`` beyond the fit's: the jackknife's sampling error, and the
+        bias the finite sample leaves in the slope.
     counts : int
         The counts (walkers) the measure was sampled with.
     """
@@ -97,6 +100,8 @@ class Spectrum:
     range_lo: np.ndarray
     range_hi: np.ndarray
     fits: tuple
+    sampling: np.ndarray
+    bias: np.ndarray
     counts: int
 
     def at(self, q: float) -> int:
@@ -207,7 +212,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         fits = tuple(Fit(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, 0, np.nan, False, "too few counts")
                      for _ in q)
         return Spectrum(q, nan, nan, nan, nan, nan, nan, nan, nan, np.zeros(nq, bool),
-                        ("too few counts",) * nq, nan, nan, fits, total)
+                        ("too few counts",) * nq, nan, nan, fits, nan, nan, total)
     parts = np.random.default_rng(seed).multinomial(counts, np.full(groups, 1.0 / groups))  # (n, groups)
     # the columns: all the counts, half of them, and all but each part
     weights = np.concatenate([counts[:, None], parts[:, :groups // 2].sum(axis=1)[:, None],
@@ -221,7 +226,8 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         Y, A, F, unseen = (np.zeros((0, nq, 2 + groups)),) * 3 + (np.zeros(0),)
     x = np.log(sides)
     families = _families(tuple(sides))
-    out = {k: np.full(nq, np.nan) for k in ("D", "err", "alpha", "aerr", "f", "ferr", "lo", "hi")}
+    out = {k: np.full(nq, np.nan) for k in ("D", "err", "alpha", "aerr", "f", "ferr", "lo", "hi",
+                                                   "sampling", "bias")}
     ok = np.zeros(nq, bool)
     reasons, fits = [], []
     for k in range(nq):
@@ -256,7 +262,9 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
             return np.sqrt((groups - 1) / groups * ((loo - loo.mean()) ** 2).sum())
 
         bias = abs(slope(Y[:, k, 1] - Y[:, k, 0]))
-        err = np.sqrt(fit.stderr ** 2 + jackknife(Y[:, k]) ** 2 + bias ** 2)
+        sampling = jackknife(Y[:, k])
+        err = np.sqrt(fit.stderr ** 2 + sampling ** 2 + bias ** 2)
+        out["sampling"][k], out["bias"][k] = sampling, bias
         out["D"][k], out["err"][k] = fit.D, err
         out["lo"][k], out["hi"][k] = fit.range_lo, fit.range_hi
         a, b = np.flatnonzero(window)[[0, -1]] + [0, 1]
@@ -269,4 +277,4 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         ok[k] = fit.ok
     D, err = out["D"], out["err"]
     return Spectrum(q, D, err, D - Z95 * err, D + Z95 * err, out["alpha"], out["aerr"], out["f"], out["ferr"], ok,
-                    tuple(reasons), out["lo"], out["hi"], tuple(fits), total)
+                    tuple(reasons), out["lo"], out["hi"], tuple(fits), out["sampling"], out["bias"], total)
