@@ -19,7 +19,8 @@ _LAZY = {"Cluster": "growth.cluster", "grow": "growth.cluster", "box_counts": "m
          "radius_of_gyration": "measures.shape", "fit_dimension": "stats.fit", "fit_mass_radius": "stats.fit",
          "load_spec": "sweep.spec", "run_sweep": "sweep.runner", "open_sweep": "data.netcdf",
          "cluster_points": "data.ragged", "cluster_parents": "data.ragged", "read_cluster": "data.ragged",
-         "export_cluster": "data.export", "summarise": "stats.summary", "report": "reporting.folder"}
+         "export_cluster": "data.export", "summarise": "stats.summary", "report": "reporting.folder",
+         "harmonic_measure": "measures.harmonic", "multifractal_spectrum": "stats.multifractal"}
 
 
 def _register_accessor():
@@ -90,6 +91,8 @@ __all__ = [
     "cluster_parents",
     "read_cluster",
     "export_cluster",
+    "harmonic_measure",
+    "multifractal_spectrum",
     "report",
     "__version__",
 ]

@@ -35,7 +35,7 @@ from ..._jit import cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
-from ..model import STEPS_DTYPE, checkpoint, grown, lockstep_flag, model_from, sticks_xo
+from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, lockstep_flag, model_from, sticks_xo
 from ..walk import return_to_plane, return_to_sphere, seed_stream, xdir, xo
 from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
 from .field import FIELD_CAP, FIELD_MASK, field_place
@@ -49,7 +49,8 @@ CIRCLE_MIN = 16.0  # smallest Brownian jump: below it the exact square jumps do 
 
 
 @jit
-def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off):
+def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off,
+          frozen):
     """Grow a lattice cluster of up to ``n`` particles.
 
     After the seed, one walker at a time is released on the launch circle
@@ -95,6 +96,12 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
         The alias tables' aliases, local to their half-width.
     t_off : int8 (C, 3)
         Each symmetry class's representative exit site.
+    frozen : None or tuple
+        None to grow. Else a frozen cluster's grid, ``(words, start, blocks, cells, field, width,
+        off, r_max, h_max)`` as ``rebuild`` and ``attach`` leave them, and ``n`` walkers are
+        walked against it, left unattached: ``points`` receives the site from which each
+        would have stuck and ``steps`` its moves (``kernels.harmonic``, the harmonic measure).
+        numba prunes the branches on ``frozen is None``: growth is compiled without them.
 
     Returns
     -------
@@ -124,7 +131,11 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 points[p, a] = (p >> a) & 1
     for p in range(count):
         r_max = max(r_max, np.sqrt(np.sum(points[p].astype(np.float64) ** 2)))
-    words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+    if frozen is None:
+        words, start, blocks, cells, field = rebuild(points, count, dim, width, off, period)
+    else:  # walkers against a frozen cluster: ``count`` counts those that would stick
+        words, start, blocks, cells, field, width, off, r_max, h_max = frozen
+        count = 0
     grid = (words, start, blocks, cells, field, width, off)
     passed = checkpoint(marks, times, 0, count, t0)
     if lockstep is not None:
@@ -357,6 +368,16 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 for a in range(up):
                     pos[a] = pos[a] % period
         rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
+        if frozen is not None:
+            if stuck:  # where it would stick, recorded; the cluster stays as it is
+                for a in range(dim):
+                    points[count, a] = q[a]
+                steps[count] = diffusion_time(pending)
+                count += 1
+                pending = 0
+                total = 0  # ``max_steps`` bounds each walker's moves
+                need_launch = True
+                stuck = False
         if stuck:
             count, r_max, h_max, width, off, regrid = attach(points, steps, count, pending, q, dim, period,
                                                              r_max, h_max, grid)
@@ -407,7 +428,7 @@ def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps,
     for i in range(len(rngs)):
         start = clock()
         counts[i], statuses[i] = _grow(dimension, lockstep, n, model, moves, marks, rngs[i], points[i], steps[i],
-                                       times[i], t_start, t_cut, t_alias, t_off)
+                                       times[i], t_start, t_cut, t_alias, t_off, None)
         seconds[i] = clock() - start
 
 

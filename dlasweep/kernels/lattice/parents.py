@@ -83,6 +83,49 @@ def _below(word, bit):
 
 
 @jit
+def _site_index(points, period, tile):
+    """The index of the occupied sites of ``points`` (n >= 1) that ``lattice_parents`` describes:
+    the box's lowest site and side in tiles, the directory of tiles, which of its squares (cubes)
+    hold one, each held tile's word and offset, and the particles' indices in tile order.
+    ``tile`` (int32 (n,)) receives each particle's tile number."""
+    n, dim = points.shape
+    lo, side = _box(points, dim, period)
+    bits = DIRECTORY_BITS[dim - 2]
+    cubes = (side + (1 << bits) - 1) >> bits  # the directory's squares (cubes) of tiles, a side
+    per_cube = 1 << (dim * bits)
+    directory = zeroed((cubes << bits) ** dim, np.int32)  # a held tile's number + 1; 0: no particle there
+    used = np.zeros(cubes ** dim, np.uint8)  # whether a square (cube) of the directory holds a tile
+    q = np.zeros(3, np.int64)
+    for i in range(n):
+        _site(points, i, dim, period, q)
+        t, _ = _slot(q[0], q[1], q[2], dim, lo, side)
+        directory[t] = 1
+        used[t // per_cube] = 1
+    held = 0
+    for c in range(len(used)):
+        if used[c]:
+            for t in range(c * per_cube, (c + 1) * per_cube):
+                if directory[t] != 0:
+                    held += 1
+                    directory[t] = held
+    words = np.zeros(held, np.uint64)
+    for i in range(n):
+        _site(points, i, dim, period, q)
+        t, k = _slot(q[0], q[1], q[2], dim, lo, side)
+        tile[i] = directory[t] - 1
+        words[tile[i]] |= np.uint64(1) << np.uint64(k)
+    offsets = np.zeros(held + 1, np.int64)
+    for u in range(held):
+        offsets[u + 1] = offsets[u] + _ones(words[u])
+    index = np.empty(n, np.int32)
+    for i in range(n):
+        _site(points, i, dim, period, q)
+        _, k = _slot(q[0], q[1], q[2], dim, lo, side)
+        index[offsets[tile[i]] + _below(words[tile[i]], k)] = i
+    return lo, side, directory, used, words, offsets, index
+
+
+@jit
 def lattice_parents(points, moves, nseed, period):
     """Each particle's parent (the rule in the module docstring).
 
@@ -124,39 +167,10 @@ def lattice_parents(points, moves, nseed, period):
     parents = np.empty(n, np.int32)
     if n == 0:
         return parents
-    lo, side = _box(points, dim, period)
+    lo, side, directory, used, words, offsets, index = _site_index(points, period, parents)
     bits, shift = DIRECTORY_BITS[dim - 2], TILE_SHIFT[dim - 2]
     cubes = (side + (1 << bits) - 1) >> bits  # the directory's squares (cubes) of tiles, a side
     per_cube = 1 << (dim * bits)
-    directory = zeroed((cubes << bits) ** dim, np.int32)  # a held tile's number + 1; 0: no particle there
-    used = np.zeros(cubes ** dim, np.uint8)  # whether a square (cube) of the directory holds a tile
-    q = np.zeros(3, np.int64)
-    for i in range(n):
-        _site(points, i, dim, period, q)
-        t, _ = _slot(q[0], q[1], q[2], dim, lo, side)
-        directory[t] = 1
-        used[t // per_cube] = 1
-    held = 0
-    for c in range(len(used)):
-        if used[c]:
-            for t in range(c * per_cube, (c + 1) * per_cube):
-                if directory[t] != 0:
-                    held += 1
-                    directory[t] = held
-    words = np.zeros(held, np.uint64)
-    for i in range(n):
-        _site(points, i, dim, period, q)
-        t, k = _slot(q[0], q[1], q[2], dim, lo, side)
-        parents[i] = directory[t] - 1
-        words[parents[i]] |= np.uint64(1) << np.uint64(k)
-    offsets = np.zeros(held + 1, np.int64)
-    for u in range(held):
-        offsets[u + 1] = offsets[u] + _ones(words[u])
-    index = np.empty(n, np.int32)
-    for i in range(n):
-        _site(points, i, dim, period, q)
-        _, k = _slot(q[0], q[1], q[2], dim, lo, side)
-        index[offsets[parents[i]] + _below(words[parents[i]], k)] = i
     for c in range(len(used)):
         if used[c] == 0:
             continue
@@ -203,3 +217,43 @@ def _earliest_neighbour(i, q0, q1, q2, moves, dim, period, lo, side, directory, 
             if j < i and (best < 0 or j < best):
                 best = j
     return best
+
+
+@jit
+def touched(points, sites, moves, period):
+    """The particle of ``points`` that each of ``sites`` touches under the rule of the module
+    docstring, as if it stuck there after every particle: of its occupied neighbours (``moves``) the
+    earliest attached; -1 for a site that touches the substrate (height 0; the substrate is first)
+    or no particle.
+
+    The walkers against a frozen cluster (``kernels.harmonic``) stick at ``sites``: this names the
+    particle each would have become the child of, from the same index as ``lattice_parents``.
+
+    Parameters
+    ----------
+    points : int (n, dim)
+        The cluster's sites in attachment order.
+    sites : int (W, dim)
+        The walkers' sites, each next to the cluster.
+    moves : int64 (M, 3)
+        The contacts (``exits.unit_moves``).
+    period : int
+        Width of a substrate's periodic sides; 0: no substrate.
+
+    Returns
+    -------
+    int32 (W,)
+    """
+    n, dim = points.shape
+    out = np.full(len(sites), -1, np.int32)
+    if n == 0:
+        return out
+    lo, side, directory, used, words, offsets, index = _site_index(points, period, np.empty(n, np.int32))
+    q = np.zeros(3, np.int64)
+    for w in range(len(sites)):
+        _site(sites, w, dim, period, q)
+        if period > 0 and q[dim - 1] == 0:
+            continue
+        out[w] = _earliest_neighbour(n, q[0], q[1], q[2], moves, dim, period, lo, side, directory, words, offsets,
+                                     index)
+    return out

@@ -1,0 +1,281 @@
+"""The multifractal spectrum of a sampled measure: D(q) by box partition sums, f(alpha) by the direct method.
+
+A measure is sampled by counts on points (the walkers that stuck to each
+particle of a cluster: ``dlasweep.measures.harmonic``). Boxes of side s
+carry p_i(s), their share of the counts; the partition sum
+Z(q, s) = sum_i p_i**q scales as s**((q - 1) D(q)), so that D(q) is the slope
+of log Z / (q - 1) on log s (of sum_i p_i log p_i at q = 1, the information
+dimension). The direct method of Chhabra and Jensen (Phys. Rev. Lett. 62,
+1327, 1989) reads the spectrum from the same boxes: with mu_i = p_i**q / Z,
+alpha(q) is the slope of sum_i mu_i log p_i and f(q) that of sum_i mu_i log mu_i.
+The grids of sides b, 2b, 4b, ... (a family) nest, and the fit gives each
+family its own intercept (``fit``: box counting's rule).
+
+It lives with the statistics, not with the measures of one point set, because
+what it returns is a fit with an error bar (``fit``'s scaling fit), whose
+honesty rules are those of the box-counting dimension:
+
+- the admissible sides run from ``min_scale`` to ``max_fraction`` of the hit
+  points' extent, and at each q down only as far as the counts resolve the
+  sums: where those of all the counts and of half of them differ by more than
+  ``tolerance`` (in log Z / (q - 1)), too few counts fall in a box, and the
+  smaller sides are left out (the sums of a finite sample are biased there:
+  small boxes look emptier or lumpier than they are); for q < 1, where the
+  boxes no count reached weigh in, also where they may be more than a
+  fraction ``tolerance`` of those reached (Chao's estimate of the unseen, from
+  the boxes of one and two counts): a sample's support grows too slowly with
+  its size for the halves to show it;
+- within that range, the widest flat window of ``min_decades`` is fitted
+  (``fit``: the window, its statistical and systematic error, ``ok`` only when
+  it is flat);
+- to that error are added in quadrature the sampling error, by a jackknife
+  over ``GROUPS`` random parts of the counts (each count given to a part at
+  random, as the walkers would be), and the bias the finite sample leaves in
+  the slope, estimated from the slope of the difference between half and all
+  the counts over the window (a sample's bias falls as one over its size).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..measures.boxes import default_scales
+from .constants import MIN_DECADES
+from .fit import Z95, Fit, _families, _line, _local_slopes, _scaling_fit, _window
+
+DEFAULT_Q = np.arange(0.0, 6.01, 0.5)
+"""The q of a spectrum unless told: from 0 to 6 by halves."""
+GROUPS = 16
+"""Parts of the counts for the jackknife."""
+SHIFTS = 1
+"""Grids per side, shifted by 0, 1/SHIFTS, ... of the side along the diagonal, whose sums are averaged. One, its
+corner at the lowest point: a grid shifted within a filled region cuts boxes at the region's edges, which biases
+D(1) of a filled set low."""
+PER_OCTAVE = 4
+"""Box sides per factor of two."""
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """The generalised dimensions and the f(alpha) spectrum of a sampled measure.
+
+    Attributes
+    ----------
+    q : ndarray
+        The moments.
+    D, stderr : ndarray
+        D(q) and its standard error (the fit's, the jackknife's and the sample's bias in quadrature).
+    ci_lo, ci_hi : ndarray
+        95% intervals, ``D -+ 1.96 stderr``.
+    alpha, alpha_err, f, f_err : ndarray
+        The direct method's alpha(q) and f(q) over D(q)'s window, with standard errors
+        (the fit's, statistical and systematic, and the jackknife's in quadrature).
+    ok : ndarray of bool
+        Whether D(q) is trusted: a flat fitted window of ``min_decades`` within the sides the counts resolve.
+    reasons : tuple of str
+        Why not, for each q ('' when ``ok``).
+    range_lo, range_hi : ndarray
+        Each q's fitted window of box sides.
+    fits : tuple of Fit
+        Each q's fit of D (``fit.Fit``), its error before the jackknife and the bias were added.
+    sampling, bias : ndarray
+        The parts of ``stderr`` beyond the fit's: the jackknife's sampling error, and the
+        bias the finite sample leaves in the slope.
+    counts : int
+        The counts (walkers) the measure was sampled with.
+    """
+
+    q: np.ndarray
+    D: np.ndarray
+    stderr: np.ndarray
+    ci_lo: np.ndarray
+    ci_hi: np.ndarray
+    alpha: np.ndarray
+    alpha_err: np.ndarray
+    f: np.ndarray
+    f_err: np.ndarray
+    ok: np.ndarray
+    reasons: tuple
+    range_lo: np.ndarray
+    range_hi: np.ndarray
+    fits: tuple
+    sampling: np.ndarray
+    bias: np.ndarray
+    counts: int
+
+    def at(self, q: float) -> int:
+        """The index of moment ``q``."""
+        where = np.flatnonzero(np.isclose(self.q, q))
+        if not len(where):
+            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
+        return int(where[0])
+
+
+def _sides(extent, min_scale):
+    """Whole box sides from ``min_scale`` up to ``extent``, ``PER_OCTAVE`` to a factor of two
+    (``boxes.default_scales``: families b, 2b, 4b, ... whose grids nest)."""
+    sides = default_scales(extent, PER_OCTAVE)
+    return sides[(sides >= min_scale) & (sides <= extent)]
+
+
+def _sums(points, weights, sides, q):
+    """The shift-averaged sums at each side for each weight column: log Z(q) / (q - 1)
+    (sum p log p at q = 1), sum mu log p and sum mu log mu, each (sides, q, columns); and for the
+    first column (whole counts) at each side, log(1 + n1**2 / (2 n2 N)): the boxes no count reached,
+    as Chao's estimate (n1 and n2 boxes hold one and two counts, N any) adds them to those it did."""
+    lo = points.min(axis=0)
+    columns = weights.shape[1]
+    shape = (len(sides), len(q), columns)
+    Z, H, A, F = (np.zeros(shape) for _ in range(4))
+    unseen = np.zeros(len(sides))
+    total = weights.sum(axis=0)
+    for j, s in enumerate(sides):
+        for t in range(SHIFTS):
+            cells = np.floor((points - lo) / s + t / SHIFTS).astype(np.int64)
+            span = cells.max(axis=0) + 1
+            key = np.ravel_multi_index(cells.T, span)
+            _, inverse = np.unique(key, return_inverse=True)
+            boxes = np.stack([np.bincount(inverse, weights[:, c]) for c in range(columns)], axis=1)
+            n1, n2 = (boxes[:, 0] == 1).sum(), (boxes[:, 0] == 2).sum()
+            unseen[j] += np.log1p(n1 * n1 / (2.0 * max(n2, 1) * len(boxes))) / SHIFTS
+            boxes /= total
+            held = boxes > 0
+            logp = np.log(np.where(held, boxes, 1.0))
+            for k, qk in enumerate(q):
+                pq = np.where(held, np.exp(qk * logp), 0.0)
+                z = pq.sum(axis=0)
+                mu = pq / z
+                Z[j, k] += z / SHIFTS
+                H[j, k] += (boxes * logp).sum(axis=0) / SHIFTS
+                A[j, k] += (mu * logp).sum(axis=0) / SHIFTS
+                F[j, k] += (mu * np.log(np.where(held, mu, 1.0))).sum(axis=0) / SHIFTS
+    one = np.isclose(q, 1.0)
+    with np.errstate(divide="ignore"):
+        Y = np.where(one[None, :, None], H, np.log(Z) / np.where(one, 1.0, q - 1.0)[None, :, None])
+    return Y, A, F, unseen
+
+
+def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float = 2.0, max_fraction: float = 0.25,
+                          min_decades: float = MIN_DECADES, min_points: int = 4, flat_tolerance: float = 0.02,
+                          tolerance: float = 0.05, groups: int = GROUPS, seed: int = 0) -> Spectrum:
+    """D(q) and f(alpha) of the measure ``counts`` on ``points``, with error bars (module docstring).
+
+    Parameters
+    ----------
+    points : array_like (n, dim) or HarmonicMeasure
+        Where the measure sits (a particle's centre or site); a ``HarmonicMeasure`` gives its
+        cluster's points and its hits.
+    counts : array_like (n,) of int, optional
+        The measure's sample: how many counts (walkers) each point received. Given with points only.
+    q : array_like
+        The moments, q >= 0.
+    min_scale : float
+        Smallest box side (particle sizes): below, a box holds part of one particle.
+    max_fraction : float
+        Largest box side, as a fraction of the extent of the points that received counts.
+    min_decades, min_points, flat_tolerance
+        The fitted window's rules (``fit.fit_dimension``).
+    tolerance : float
+        Largest difference between the sums of half the counts and of all, in log Z / (q - 1),
+        at an admissible side.
+    groups : int
+        Parts of the counts for the jackknife, >= 4.
+    seed : int
+        The stream that gives each count its part.
+
+    Returns
+    -------
+    Spectrum
+    """
+    if counts is None:
+        if not hasattr(points, "hits"):
+            raise TypeError("counts: needed with points (or pass a HarmonicMeasure alone)")
+        points, counts = points.points, points.hits
+    points = np.asarray(points, np.float64)
+    counts = np.asarray(counts)
+    q = np.atleast_1d(np.asarray(q, np.float64))
+    if points.ndim != 2 or counts.shape != (len(points),):
+        raise ValueError(f"points and counts: expected (n, dim) and (n,), got {points.shape} and {counts.shape}")
+    if counts.dtype.kind not in "iu" or (counts < 0).any():
+        raise ValueError("counts: expected non-negative whole counts")
+    if (q < 0).any():
+        raise ValueError(f"q: expected q >= 0, got {q.tolist()}")
+    if groups < 4:
+        raise ValueError(f"groups: expected at least 4, got {groups}")
+    held = counts > 0
+    points, counts = points[held], counts[held].astype(np.int64)
+    total = int(counts.sum())
+    nq = len(q)
+    nan = np.full(nq, np.nan)
+    if total < 2 * groups:
+        fits = tuple(Fit(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, 0, np.nan, False, "too few counts")
+                     for _ in q)
+        return Spectrum(q, nan, nan, nan, nan, nan, nan, nan, nan, np.zeros(nq, bool),
+                        ("too few counts",) * nq, nan, nan, fits, nan, nan, total)
+    parts = np.random.default_rng(seed).multinomial(counts, np.full(groups, 1.0 / groups))  # (n, groups)
+    # the columns: all the counts, half of them, and all but each part
+    weights = np.concatenate([counts[:, None], parts[:, :groups // 2].sum(axis=1)[:, None],
+                              counts[:, None] - parts], axis=1).astype(np.float64)
+    extent = float((points.max(axis=0) - points.min(axis=0)).max()) + 1.0
+    sides = _sides(max_fraction * extent, min_scale)
+    sides = sides[sides <= max_fraction * extent * (1 + 1e-9)]
+    if len(sides):
+        Y, A, F, unseen = _sums(points, weights, sides, q)
+    else:
+        Y, A, F, unseen = (np.zeros((0, nq, 2 + groups)),) * 3 + (np.zeros(0),)
+    x = np.log(sides)
+    families = _families(tuple(sides))
+    out = {k: np.full(nq, np.nan) for k in ("D", "err", "alpha", "aerr", "f", "ferr", "lo", "hi",
+                                                   "sampling", "bias")}
+    ok = np.zeros(nq, bool)
+    reasons, fits = [], []
+    for k in range(nq):
+        y, half = Y[:, k, 0], Y[:, k, 1]
+        good = np.isfinite(y) & np.isfinite(half) & (np.abs(half - y) <= tolerance)
+        if q[k] < 1:  # boxes no count reached weigh in: as many as the counts leave unseen, at most
+            good &= unseen <= tolerance
+        # the sides from the largest down, as far as each one is resolved
+        first = len(sides)
+        while first > 0 and good[first - 1]:
+            first -= 1
+        keep = slice(first, len(sides))
+        fit = _scaling_fit(x[keep], y[keep], sides[keep], families[keep], 1.0,
+                           min_decades=min_decades, min_points=min_points, flat_tolerance=flat_tolerance,
+                           unit="box side")
+        if first > 0 and not fit.ok:
+            fit = Fit(*[getattr(fit, name) for name in ("D", "stderr", "ci_lo", "ci_hi", "range_lo", "range_hi",
+                                                        "npoints", "drift", "ok")],
+                      reason=f"{fit.reason} (the counts resolve sides from {sides[first]:.3g} up)")
+        fits.append(fit)
+        reasons.append(fit.reason)
+        if not np.isfinite(fit.D):
+            continue
+        window = (sides >= fit.range_lo * (1 - 1e-9)) & (sides <= fit.range_hi * (1 + 1e-9))
+        xw = x[window]
+
+        def slope(v):
+            return _line(xw, v[window], families[window])[0]
+
+        def jackknife(V):
+            loo = np.array([slope(V[:, 2 + g]) for g in range(groups)])
+            return np.sqrt((groups - 1) / groups * ((loo - loo.mean()) ** 2).sum())
+
+        bias = abs(slope(Y[:, k, 1] - Y[:, k, 0]))
+        sampling = jackknife(Y[:, k])
+        err = np.sqrt(fit.stderr ** 2 + sampling ** 2 + bias ** 2)
+        out["sampling"][k], out["bias"][k] = sampling, bias
+        out["D"][k], out["err"][k] = fit.D, err
+        out["lo"][k], out["hi"][k] = fit.range_lo, fit.range_hi
+        a, b = np.flatnonzero(window)[[0, -1]] + [0, 1]
+        for name, V in (("alpha", A), ("f", F)):
+            # the fit's errors over D's window (statistical, and half the change of the local slope)
+            w = _window(x, V[:, k, 0], x, families, 1.0, _local_slopes(x, V[:, k, 0], x, families), a, b,
+                        flat_tolerance)
+            out[name][k] = w.D
+            out["aerr" if name == "alpha" else "ferr"][k] = np.hypot(w.stderr, jackknife(V[:, k]))
+        ok[k] = fit.ok
+    D, err = out["D"], out["err"]
+    return Spectrum(q, D, err, D - Z95 * err, D + Z95 * err, out["alpha"], out["aerr"], out["f"], out["ferr"], ok,
+                    tuple(reasons), out["lo"], out["hi"], tuple(fits), out["sampling"], out["bias"], total)
