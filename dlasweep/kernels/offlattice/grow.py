@@ -14,7 +14,7 @@ from ..walk import seed_stream
 from .celllist import attachment_order, sort_cells, sort_tail
 from .grid import build_grid, level_starts, no_grid, regrow_grid
 from .lockstep import grow_in_lockstep
-from .walker import HEADS_FULL, attach, index_late, neighbour_list, walk_to_contact
+from .walker import HEADS_FULL, LCAP, LCAP_CLOSE, attach, index_late, neighbour_list, walk_to_contact
 
 BY_CELL = (False, False, False, True)
 """By dimension: whether the particles' rows are stored cell after cell while the cluster grows
@@ -105,8 +105,9 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
     normal = np.zeros(4)  # and the particle touched (``contact.settle``)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
-    lx, ly, lz, li = neighbour_list()
-    mx, my, mz, mi = neighbour_list()
+    lcap = LCAP if model.contact_distance == 1.0 else LCAP_CLOSE
+    lx, ly, lz, li = neighbour_list(lcap)
+    mx, my, mz, mi = neighbour_list(lcap)
     hb = 0.5 * size
     boxed = size > 0 and not line
     total = np.int64(0)
@@ -145,6 +146,11 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
         if not stuck:
             status = codes.STEP_LIMIT
             break
+        if model.contact_distance < 1.0 and normal[3] >= 0.0:
+            # noise reduction (``contact_distance``): moved along the line of centres, at contact_distance
+            # from the particle (its image) touched; a walker at the substrate stays
+            for a in range(dim):
+                w[a] -= (1.0 - model.contact_distance) * normal[a]
         count, tiles = attach(w, normal[3], count, pending, pts, order, steps, parents, nxt, geo, dim, line, size, gi,
                               gf, words, start, blocks, cells, dirr, heads, field)
         if tiles == HEADS_FULL:

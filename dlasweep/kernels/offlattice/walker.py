@@ -37,14 +37,18 @@ particle against 50.4); 3D 3e6, radius 4 1.070 and 1.088, radius 2.5 1.079 and 0
 LCAP = 1024
 """Capacity of the neighbour lists (a packing within radius 6 in 2D or 3 in
 3D holds < 200)."""
+LCAP_CLOSE = 4096
+"""Capacity of the neighbour lists where particles lie closer than a diameter (``contact_distance`` below 1,
+at least ``params.MIN_CONTACT_DISTANCE``, 0.5): centres at least 0.5 apart, within radius 3 in 3D, number
+about 8 times a unit packing's (under 200), with room for the cells' heads."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 
 
 @jit
-def neighbour_list():
+def neighbour_list(cap=LCAP):
     """Empty arrays for ``celllist.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
-    return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
+    return np.empty(cap), np.empty(cap), np.zeros(cap), np.empty(cap, np.int64)
 
 
 @borrow
