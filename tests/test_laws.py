@@ -211,7 +211,7 @@ def test_the_laws_combine_where_the_kernels_grow_them():
 
 
 def _ensemble(n, seeds, **kw):
-    clusters = dla.grow_many(n, seeds, **kw)
+    clusters = [dla.grow(n, seed=s, **kw) for s in seeds]
     assert all(c.n == n for c in clusters)
     return clusters
 
@@ -226,8 +226,10 @@ def test_noise_reduction_grows_the_square_lattices_four_arms():
     """Noise reduction brings out the square lattice's asymptotic shape (Tang 1985; Kertesz and
     Vicsek 1986): anisotropy rising with m (measured at 2e4, 4 seeds: 0.46, 0.85 and 0.94 at
     m = 1, 4 and 16, standard errors 0.02 or less) and the effective mass-radius D falling
-    towards 3/2 (1.70, 1.60, 1.55). 1e4 particles, 6 seeds each: each step of m asks for a
-    rise of 5 standard errors of the difference, and a fall of D by 0.05 at least from m = 1 to 16."""
+    towards 3/2 (1.70, 1.60, 1.55). Here 1e4 particles, 6 seeds each (measured: anisotropy 0.34,
+    0.84, 0.94, standard errors 0.049, 0.012, 0.003; D 1.706, 1.591, 1.535, standard errors 0.021,
+    0.015, 0.005): each step of m asks for a rise of 5 standard errors of the difference (8 to 10
+    measured), and D a fall of 0.08 (4 standard errors) from m = 1 to 16, staying above 1.4."""
     n, seeds = 10_000, range(6)
     counts = [500, 1000, 2000, 5000, 10_000]
     rows = []
@@ -237,8 +239,8 @@ def test_noise_reduction_grows_the_square_lattices_four_arms():
         d = np.array([_mass_radius_dimension(c, counts) for c in clusters])
         rows.append((m, a.mean(), a.std(ddof=1) / np.sqrt(len(a)), d.mean()))
     for (m0, a0, e0, d0), (m1, a1, e1, d1) in zip(rows, rows[1:]):
-        assert a1 - a0 > 5 * np.hypot(e0, e1) or (m1 == 16 and a1 - a0 > 2 * np.hypot(e0, e1)), rows
-    assert rows[0][3] - rows[-1][3] > 0.05, rows
+        assert a1 - a0 > 5 * np.hypot(e0, e1), rows
+    assert rows[0][3] - rows[-1][3] > 0.08, rows
     assert rows[-1][3] > 1.4, rows
 
 
@@ -247,7 +249,7 @@ def test_the_neighbour_law_moves_the_arms_to_the_diagonals():
     """Aukrust et al. 1989: with alpha**(3 - B) growth goes from the axes to the diagonals below a
     critical alpha_c of about 0.175. At 2e4 particles (4 seeds) the measured anisotropy is 0.46 at
     alpha = 1 and -0.25 at 0.1: here 1e4 particles, 6 seeds, the sign of each asked for at 4
-    standard errors."""
+    standard errors (measured: 0.34 and -0.22 at alpha 1 and 0.08, 7 standard errors from 0)."""
     n, seeds = 10_000, range(6)
     for alpha, sign in ((1.0, 1), (0.08, -1)):
         a = np.array([anisotropy(c.points, [n])[0] for c in _ensemble(n, seeds, neighbour_alpha=alpha)])
