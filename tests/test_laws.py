@@ -267,3 +267,19 @@ def test_off_lattice_noise_reduction_compacts_the_cluster():
                       for c in _ensemble(n, seeds, model="offlattice", contact_distance=0.5)])
     se = np.hypot(plain.std(ddof=1), close.std(ddof=1)) / np.sqrt(len(seeds))
     assert plain.mean() - close.mean() > 5 * se, (plain.mean(), close.mean(), se)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kw, sign", [(dict(dim=3), 1), (dict(neighbours=8), -1), (dict(dim=3, neighbours=26), -1)])
+def test_noise_reduction_brings_out_each_lattices_own_arms(kw, sign):
+    """Noise reduction brings out the anisotropy of each lattice and neighbourhood: arms along the axes
+    on the cubic lattice, along the diagonals with Moore neighbours (moves and contacts on the
+    diagonals too). Measured at 1e4 (4 seeds), m = 1 against 16: 3D 0.04 against 0.76, 2D Moore
+    -0.07 against -0.93, 3D Moore -0.11 against -0.48 (standard errors 0.075 at most). Here 5000
+    particles, 4 seeds: the change from m = 1 to 16 has the lattice's sign, at 5 standard errors."""
+    n, seeds = 5000, range(4)
+    a = {m: np.array([anisotropy(c.points, [n])[0] for c in _ensemble(n, seeds, noise_reduction=m, **kw)])
+         for m in (1, 16)}
+    change = a[16].mean() - a[1].mean()
+    se = np.hypot(a[1].std(ddof=1), a[16].std(ddof=1)) / np.sqrt(len(seeds))
+    assert sign * change > 5 * se, (kw, a)
