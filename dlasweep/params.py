@@ -105,6 +105,12 @@ clusters (the return to the launch circle is exact) more slowly, and at 1e200 th
 overflow to inf and it never ends."""
 MAX_WALKERS = 1_000_000
 """Most lockstep walkers (their positions: 24 MB)."""
+MAX_NOISE_REDUCTION = 1000
+"""Largest noise_reduction: a particle takes that many walkers (at 1000, 2D lattice 1e4 particles: about 1e7
+walks)."""
+MIN_CONTACT_DISTANCE = 0.5
+"""Smallest contact_distance: particles come no closer than it, so that the walk's neighbour lists
+(``kernels.offlattice.walker.LCAP_CLOSE``) hold every centre within their radius (3D: about 1600 at 0.5)."""
 MAX_COUNT = 2 ** 62
 """Largest step budget: the kernels count steps in int64."""
 MAX_SEED = 2 ** 63 - 1
@@ -194,6 +200,40 @@ PARAMETERS = {
                          checks=(_below(1, "1"), _above(MAX_WALKERS, MAX_WALKERS),
                                  lambda w, p, given: "more than one walker needs size > 0 (they start uniformly in the "
                                  "box)" if w > 1 and p["size"] == 0 else None)),
+    "noise_reduction": Parameter(
+        int, 1, f"an integer in [1, {MAX_NOISE_REDUCTION}]",
+        "lattice noise reduction: touches a perimeter site takes before it is occupied (1 = plain DLA)",
+        note="each touch is counted at the site and its walker relaunched; the m-th touch occupies it",
+        checks=(_below(1, "1"), _above(MAX_NOISE_REDUCTION, MAX_NOISE_REDUCTION),
+                lambda m, p, given: "noise reduction applies only to model='lattice' (off the lattice: "
+                "contact_distance)" if m > 1 and p["model"] == "offlattice" else None,
+                lambda m, p, given: "noise reduction needs walkers=1 (it relaunches the walker)"
+                if m > 1 and p["walkers"] > 1 else None)),
+    "neighbour_alpha": Parameter(
+        float, 1.0, "(0, 1]",
+        "lattice attachment by occupied neighbours: stickiness * alpha**(B_full - B) at a site with B occupied "
+        "neighbours (1 = constant stickiness)",
+        note="B_full = neighbours - 1 (3 on the square lattice: Aukrust et al. 1989's alpha**(3-B)); the "
+             "substrate counts as occupied",
+        checks=(lambda a, p, given: None if 0.0 < a <= 1.0 else f"{a} is not in (0, 1]",
+                lambda a, p, given: "attachment by neighbours applies only to model='lattice'"
+                if a != 1.0 and p["model"] == "offlattice" else None,
+                lambda a, p, given: f"{a} gives a site with one occupied neighbour a sticking probability "
+                f"{p['stickiness'] * a ** (p['neighbours'] - 2):.3g}, below {MIN_STICKINESS:g} (about 1/that "
+                f"contacts a particle)" if a < 1.0 and p["stickiness"] * a ** (p["neighbours"] - 2) < MIN_STICKINESS
+                else None)),
+    "contact_distance": Parameter(
+        float, 1.0, f"[{MIN_CONTACT_DISTANCE:g}, 1]",
+        "off-lattice noise reduction: a particle's centre distance from the one it touched, in diameters "
+        "(1 = plain DLA)",
+        note="the walker that touches is moved along the line of centres (fastDLA's noiseReductionFactor); at the "
+             "substrate it stays",
+        checks=(lambda f, p, given: None if MIN_CONTACT_DISTANCE <= f <= 1.0
+                else f"{f} is not in [{MIN_CONTACT_DISTANCE:g}, 1] (closer particles overflow the walk's neighbour "
+                     f"lists)",
+                lambda f, p, given: "contact_distance applies only to model='offlattice' (on the lattice: "
+                "noise_reduction)" if f != 1.0 and p["model"] == "lattice" else None,
+                lambda f, p, given: "contact_distance needs walkers=1" if f != 1.0 and p["walkers"] > 1 else None)),
     "max_steps": Parameter(int, 0, "an integer in [0, 2**62]", "walk-step budget per cluster (0 = none); growth "
                                                                "stops with status step_limit when it runs out",
                            checks=(_negative, _above(MAX_COUNT, "2**62"))),

@@ -179,7 +179,7 @@ def test_touches_and_step_to_are_near_step(dim, moore, line):
         stickiness = (1.0, 0.4)[tried % 2]
         want_q, want_rs = q.copy(), stream.copy()
         want = lattice_walker.near_step(words, dim, start, blocks, width, off, want_q, moves, period, stickiness,
-                                          want_rs, near)
+                                          want_rs, near, 1.0)
         pos = q.astype(np.float64)
         got_rs = tuple(stream)
         got = lattice_walker.touches(words, dim, blocks[0], width, off, q, moves, nm, line, period)

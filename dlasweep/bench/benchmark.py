@@ -54,7 +54,8 @@ BENCH_SCHEMA = {
        for reads, mib in BESIDE_A_RUN.items() for when in ("before", "after")},
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
-    "method": Variable(("run",), str, None, "exact jumps or the naive single-step walk with a kill circle"),
+    "method": Variable(("run",), str, None,
+                       "exact jumps, the naive single-step walk with a kill circle, or a growth law's parameter=value"),
 }
 """The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
 its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
@@ -84,6 +85,15 @@ cluster of 1e5 took 0.38 to 0.55 s in six runs within a minute on one machine, a
 speed drifts over the minutes between a model's first runs and its last. The cost exponent is
 given with the range its fit takes from the fastest and slowest runs of each N
 (``cost_exponent_range``)."""
+LAWS = {
+    "lattice-2d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.2": {"neighbour_alpha": 0.2}},
+    "lattice-3d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.5": {"neighbour_alpha": 0.5}},
+    "offlattice-2d": {"contact_distance=0.5": {"contact_distance": 0.5}},
+    "offlattice-3d": {"contact_distance=0.5": {"contact_distance": 0.5}},
+}
+"""The growth laws each model runs at ``LAW_COUNT`` beside its exact method, named ``parameter=value``
+as ``method``: their cost beside plain DLA's at the same N (issue 72)."""
+LAW_COUNT = 1_000_000
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
 
@@ -151,6 +161,8 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         counts += [HUGE_COUNT] if huge and "2d" in name else []
         counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
         plan += [(name, "exact", params, n) for n in counts]
+        plan += [(name, method, {**params, **law}, QUICK_COUNT if quick else LAW_COUNT)
+                 for method, law in LAWS.get(name, {}).items()]
     naive_counts = ([QUICK_COUNT // 4] if quick else NAIVE_COUNTS) if "lattice-2d" in models else []
     for n in naive_counts:
         plan.append(("lattice-2d", "exact", MODELS["lattice-2d"], n))

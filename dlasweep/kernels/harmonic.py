@@ -92,8 +92,8 @@ def _offlattice_walk(dimension, model, points, rngs, walkers, hits, where, steps
     normal = np.zeros(4)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
-    lx, ly, lz, li = neighbour_list()
-    mx, my, mz, mi = neighbour_list()
+    lx, ly, lz, li = neighbour_list(model.contact_distance)
+    mx, my, mz, mi = neighbour_list(model.contact_distance)
     launch_r = model.launch_factor * (max(geo[2], 0.0) if line else geo[0]) + model.launch_margin
     for b in range(len(rngs)):
         rng = rngs[b]

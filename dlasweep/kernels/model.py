@@ -46,6 +46,7 @@ def diffusion_time(pending):
 Model = namedtuple("Model", [
     "dim", "neighbours", "stickiness", "seed_shape", "size", "launch_box", "launch_factor", "launch_margin",
     "kill_factor", "exact_return", "kill", "jumps", "step", "walkers", "max_steps",
+    "noise_reduction", "neighbour_alpha", "contact_distance",
 ])
 Model.__doc__ = """The resolved model parameters as the kernels take them (a numba named tuple).
 
@@ -72,6 +73,8 @@ def model_from(p) -> Model:
         exact_return=bool(p["kill_factor"] == 0.0 and not launch_box and not boxed),
         kill=bool(p["kill_factor"] > 0.0 and not launch_box),
         jumps=bool(p["jumps"]), step=float(p["step"]), walkers=int(p["walkers"]), max_steps=int(p["max_steps"]),
+        noise_reduction=int(p["noise_reduction"]), neighbour_alpha=float(p["neighbour_alpha"]),
+        contact_distance=float(p["contact_distance"]),
     )
 
 
@@ -109,6 +112,15 @@ def sticks_xo(stickiness, s0, s1, s2, s3):
         s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
         stuck = u < stickiness
     return stuck, s0, s1, s2, s3
+
+
+@jit
+def neighbour_stickiness(stickiness, alpha, occupied, full):
+    """The probability to stick at a site with ``occupied`` occupied neighbours (the substrate counted):
+    ``stickiness * alpha**(full - occupied)``, ``stickiness`` from ``full`` occupied on (the
+    ``neighbour_alpha`` law; Aukrust et al. 1989's ``alpha**(3 - B)`` on the square lattice, ``full``
+    3: every neighbour occupied but the one a walker came from)."""
+    return stickiness * alpha ** (full - occupied) if occupied < full else stickiness
 
 
 @jit

@@ -29,7 +29,8 @@ in docs/performance.md.
 """
 
 import numpy as np
-from numba import literally
+from numba import literally, types
+from numba.typed import Dict
 
 from ..._jit import cached, call_literal, clock, jit
 from .. import maps
@@ -41,7 +42,7 @@ from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
 from .field import FIELD_CAP, FIELD_MASK, field_place
 from .lockstep import grow_in_lockstep
 from .parents import lattice_parents
-from .walker import FAR_CLEAR, attach, near_walk, outside, release, site
+from .walker import FAR_CLEAR, attach, contact_sticks, near_walk, outside, release, site
 from .words import fine2, fine3, rebuild, regrow, site_word, word_at
 
 JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
@@ -142,6 +143,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
         return grow_in_lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points, steps, count, r_max, h_max,
                                 grid)
     stickiness, max_steps, jumps = model.stickiness, model.max_steps, model.jumps
+    alpha, noise = model.neighbour_alpha, model.noise_reduction
+    hits = Dict.empty(key_type=types.int64, value_type=types.int64)  # noise reduction's touches by site
     launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
     up = dim - 1
     boxed = size > 0 and not line
@@ -224,7 +227,7 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 stuck, taken = near_walk(
                     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
                     boxed or launch_box, box_lo, box_hi, kill_r if kill else return_r,
-                    max(budget, 0),
+                    max(budget, 0), alpha,
                 )
                 s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
                 total += taken
@@ -288,7 +291,11 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                         break
                 # <<< touches
                 if touch:
-                    touch, s0, s1, s2, s3 = sticks_xo(stickiness, s0, s1, s2, s3)
+                    if alpha < 1.0:  # the neighbour_alpha law
+                        touch, s0, s1, s2, s3 = contact_sticks(words, dim, start, blocks, width, off, q, moves,
+                                                               period, stickiness, alpha, s0, s1, s2, s3)
+                    else:
+                        touch, s0, s1, s2, s3 = sticks_xo(stickiness, s0, s1, s2, s3)
                 if touch:
                     stuck = True
                     break
@@ -378,6 +385,9 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 total = 0  # ``max_steps`` bounds each walker's moves
                 need_launch = True
                 stuck = False
+        if stuck and noise > 1 and not occupy(hits, q, noise):
+            stuck = False  # a touch counted at q: the walker is relaunched
+            need_launch = True
         if stuck:
             count, r_max, h_max, width, off, regrid = attach(points, steps, count, pending, q, dim, period,
                                                              r_max, h_max, grid)
@@ -391,6 +401,22 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 break
     return count, status
 
+
+
+@jit
+def occupy(hits, q, noise):
+    """Count a touch of site q in ``hits`` (site key to touches); whether it is the ``noise``-th, which
+    occupies the site (its count then dropped). Lattice noise reduction (``noise_reduction``): a
+    perimeter site is occupied after ``noise`` walkers touched it; sites are keyed by 21 bits an axis,
+    which hold every site of a cluster of ``spec.MAX_PARTICLES``."""
+    key = ((q[0] + (1 << 20)) << 42) | ((q[1] + (1 << 20)) << 21) | (q[2] + (1 << 20))
+    touches = hits.get(key, 0) + 1
+    if touches < noise:
+        hits[key] = touches
+        return False
+    if touches > 1:
+        hits.pop(key)
+    return True
 
 
 @jit

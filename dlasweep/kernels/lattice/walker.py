@@ -10,7 +10,7 @@ import numpy as np
 from ..._jit import borrow, jit
 from .. import maps
 from ..centres import pyramid_dist
-from ..model import GRID_GROWTH, diffusion_time, sticks_xo
+from ..model import GRID_GROWTH, diffusion_time, neighbour_stickiness, sticks_xo
 from ..walk import below, direction, uniform, xo
 from .field import FIELD_CAP, FIELD_MASK, field_place
 from .words import fine2, fine3, in_contact, mark_images, occupied, site_word, word_at
@@ -43,7 +43,35 @@ def outside(q, dim, line, lo, hi):
 
 
 @borrow
-def near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+def occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period):
+    """How many of site q's neighbours under ``moves`` are occupied, the substrate's
+    sites (below height 0) counted as occupied: B of the ``neighbour_alpha`` law."""
+    b = 0
+    for m in range(moves.shape[0]):
+        n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
+        if period > 0:
+            if (n2 if dim == 3 else n1) < 0:
+                b += 1
+                continue
+            n0 = n0 % period
+            if dim == 3:
+                n1 = n1 % period
+        if occupied(words, dim, start, blocks, width, off, n0, n1, n2):
+            b += 1
+    return b
+
+
+@borrow
+def contact_sticks(words, dim, start, blocks, width, off, q, moves, period, stickiness, alpha, s0, s1, s2, s3):
+    """Whether a walker at site q, which touches the cluster, sticks under the ``neighbour_alpha`` law
+    (``model.neighbour_stickiness``, B from ``occupied_neighbours``, B_full the neighbourhood less
+    one), and the stream's new state (registers, as ``model.sticks_xo``)."""
+    b = occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period)
+    return sticks_xo(neighbour_stickiness(stickiness, alpha, b, moves.shape[0] - 1), s0, s1, s2, s3)
+
+
+@borrow
+def near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha):
     """One site of the exact lattice walk: stick, or step to a random neighbour.
 
     The walker first sticks with probability ``stickiness`` if it touches the
@@ -77,7 +105,11 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
     up = dim - 1
     line = period > 0
     if (near or (line and q[up] <= 1)) and in_contact(words, dim, start, blocks, width, off, q, moves, period):
-        stuck, rs[0], rs[1], rs[2], rs[3] = sticks_xo(stickiness, rs[0], rs[1], rs[2], rs[3])
+        if alpha < 1.0:  # the neighbour_alpha law
+            stuck, rs[0], rs[1], rs[2], rs[3] = contact_sticks(words, dim, start, blocks, width, off, q, moves,
+                                                               period, stickiness, alpha, rs[0], rs[1], rs[2], rs[3])
+        else:
+            stuck, rs[0], rs[1], rs[2], rs[3] = sticks_xo(stickiness, rs[0], rs[1], rs[2], rs[3])
         if stuck:
             return True
     m = np.int64(uniform(rs) * moves.shape[0])
@@ -95,7 +127,7 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
 @borrow
 def near_walk(
     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
-    boxed, lo, hi, radius, budget,
+    boxed, lo, hi, radius, budget, alpha,
 ):
     """Single lattice steps from site q until the walker sticks or may leave.
 
@@ -144,7 +176,7 @@ def near_walk(
         ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
         # a clear level-1 cell: no particle within two sites
         near = ingrid and maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1)
-        if near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near):
+        if near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha):
             return True, taken
         taken += 1
         if taken == budget:

@@ -114,8 +114,8 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
     normal = np.zeros(4)  # and the particle touched (``contact.settle``)
     scratch = np.zeros(3)
     anchor = np.zeros(3)
-    lx, ly, lz, li = neighbour_list()
-    mx, my, mz, mi = neighbour_list()
+    lx, ly, lz, li = neighbour_list(model.contact_distance)
+    mx, my, mz, mi = neighbour_list(model.contact_distance)
     hb = 0.5 * size
     boxed = size > 0 and not line
     total = np.int64(0)
@@ -154,6 +154,11 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
         if not stuck:
             status = codes.STEP_LIMIT
             break
+        if model.contact_distance < 1.0 and normal[3] >= 0.0:
+            # noise reduction (``contact_distance``): moved along the line of centres, at contact_distance
+            # from the particle (its image) touched; a walker at the substrate stays
+            for a in range(dim):
+                w[a] -= (1.0 - model.contact_distance) * normal[a]
         count, tiles = attach(w, normal[3], count, pending, pts, order, steps, parents, nxt, geo, dim, line, size, gi,
                               gf, words, start, blocks, cells, dirr, heads, field)
         if tiles == HEADS_FULL:

@@ -34,14 +34,26 @@ docs/performance.md)."""
 LCAP = 1024
 """Capacity of the neighbour lists (a packing within radius 6 in 2D or 3 in
 3D holds < 200)."""
+LCAP_CLOSE = 4096
+"""Capacity of the neighbour lists where particles lie closer than a diameter (``contact_distance`` below 1,
+at least ``params.MIN_CONTACT_DISTANCE``, 0.5): centres at least 0.5 apart, within radius 3 in 3D, number
+about 8 times a unit packing's (under 200), with room for the cells' heads."""
 GAUSS_JUMP = 4.0
 """With step > 0 and jumps, walk-on-spheres only beyond this many step stds."""
 
 
 @jit
-def neighbour_list():
-    """Empty arrays for ``celllist.gather`` to fill: x, y, z (z stays 0 in 2D) and indices."""
-    return np.empty(LCAP), np.empty(LCAP), np.zeros(LCAP), np.empty(LCAP, np.int64)
+def neighbour_list(contact_distance=1.0):
+    """Empty arrays for ``celllist.gather`` to fill: x, y, z (z stays 0 in 2D) and indices.
+
+    Parameters
+    ----------
+    contact_distance : float
+        The model's ``contact_distance``: below 1 particles lie closer than a diameter, and the
+        lists hold ``LCAP_CLOSE`` entries, else ``LCAP``.
+    """
+    cap = LCAP if contact_distance == 1.0 else LCAP_CLOSE
+    return np.empty(cap), np.empty(cap), np.zeros(cap), np.empty(cap, np.int64)
 
 
 @borrow
