@@ -1,6 +1,6 @@
 """The ``dlasweep`` console command's entry: Ctrl-C at any moment ends it in one line.
 
-A command loads numpy, numba and netCDF (about 1.5 s): ``cli`` itself,
+A command loads numpy, numba and netCDF, which takes a noticeable moment: ``cli`` itself,
 then the modules of the command (``loading``); an interrupt then would
 otherwise print a traceback. The package's own ``__init__`` loads nothing
 heavy, so this module runs before any of it.
@@ -24,8 +24,9 @@ def run() -> None:
     did not catch.
 
     The process ends without tearing the interpreter down: freeing the modules
-    a command loads (numba and LLVM, dask, pandas) took 0.4 to 0.6 s at exit, as
-    long as a small sweep's clusters take to grow. By the time ``main`` returns
+    a command loads (numba and LLVM, dask, pandas) at exit takes about as long
+    as a small sweep's clusters take to grow (docs/performance.md, "The command
+    and its start"). By the time ``main`` returns
     every file is closed; the exit handlers still run and the output is flushed
     before the process ends.
     """

@@ -60,9 +60,25 @@ def seed_interval(estimate, replicates, n: int, axis=-1):
 
     ``estimate`` +- ``t95(n - 1)`` times the replicates' standard deviation
     times sqrt(n / (n - 1)), which undoes the bootstrap's plug-in variance.
-    Percentile intervals of a bootstrap over tens of seeds are too narrow
-    (tests/test_analysis.py measures 79% at 4 seeds, 90% at 10); this one
-    holds 95% from 3 seeds on.
+    Percentile intervals of a bootstrap over a few seeds are too narrow
+    (tests/test_analysis.py; docs/performance.md, "Statistics"); this one
+    holds its coverage from 3 seeds on.
+
+    Parameters
+    ----------
+    estimate : float or ndarray
+        The estimate from all ``n`` seeds.
+    replicates : ndarray
+        Its bootstrap replicates, along ``axis``.
+    n : int
+        Seeds the estimate is over.
+    axis : int
+        The axis of ``replicates`` that holds the replicates.
+
+    Returns
+    -------
+    tuple
+        The interval's low and high ends.
     """
     half = t95(n - 1) * np.std(replicates, axis=axis, ddof=1) * np.sqrt(n / (n - 1))
     return estimate - half, estimate + half

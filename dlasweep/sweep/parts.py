@@ -114,7 +114,7 @@ class Parts:
         for name in next(iter(results.values())):
             each = [np.asarray(r[name]) for r in results.values()]
             # Empty arrays (a failed cluster's points) must not set the dtype of the others; one
-            # array alone is not copied (a 1e8 cluster's positions are 800 MB and more).
+            # array alone is not copied (a 1e8 cluster's positions are 8e8 bytes and more).
             filled = [v.ravel() for v in each if v.size] or [each[0].ravel()]
             members[name] = filled[0] if len(filled) == 1 else np.concatenate(filled)
             members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)
