@@ -49,7 +49,11 @@ def cluster_parents(ds: xr.Dataset, index=None, **where) -> np.ndarray:
 
     Parameters
     ----------
-    ds, index, where
+    ds : xarray.Dataset
+        As for ``cluster_points``.
+    index : int, optional
+        As for ``cluster_points``.
+    **where
         As for ``cluster_points``.
 
     Returns
@@ -78,7 +82,11 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
 
     Parameters
     ----------
-    ds, index, where
+    ds : xarray.Dataset
+        As for ``cluster_points``.
+    index : int, optional
+        As for ``cluster_points``.
+    **where
         As for ``cluster_points``.
 
     Returns

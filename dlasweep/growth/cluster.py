@@ -36,7 +36,10 @@ INLINE_INCHES, INLINE_DPI = 4.5, 100
 class Cluster:
     """One grown cluster.
 
-    Attributes
+    ``grow`` makes it, and ``read_cluster`` from a sweep's file; its fields
+    are its constructor's parameters.
+
+    Parameters
     ----------
     points : ndarray, (n_grown, dim)
         Positions in attachment order (int32 on a lattice, float64 off it),
@@ -73,6 +76,7 @@ class Cluster:
 
     @property
     def n(self) -> int:
+        """Particles in the cluster (``len(points)``), the seed particles included."""
         return len(self.points)
 
     def _repr_png_(self) -> bytes:

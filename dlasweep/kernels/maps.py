@@ -269,7 +269,21 @@ def untiled(dim, bits, ti, tj, tk, inner):
 
 @jit
 def test(words, dim, start, blocks, s, i, j, k):
-    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset)."""
+    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset).
+
+    Parameters
+    ----------
+    words : uint64 array
+        The map's words, every segment one after the other (``allocate``).
+    dim : int
+        The dimension, 2 or 3.
+    start, blocks : int64 arrays
+        Each segment's first word and its blocks a side (``layout``).
+    s : int
+        The segment read.
+    i, j, k : int
+        The cell (k is 0 in 2D).
+    """
     w, b = index(dim, start[s], blocks[s], i, j, k)
     return (words[w] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
 
@@ -283,6 +297,19 @@ def mark(words, dim, start, blocks, cells, i, j, k):
     level from there up, so only the levels below are marked. Words are
     indexed here with scalars (``index``): a helper call that passes the
     arrays would cost atomic reference counting per cell.
+
+    Parameters
+    ----------
+    words : uint64 array
+        The map's words, every segment one after the other (``allocate``).
+    dim : int
+        The dimension, 2 or 3.
+    start, blocks : int64 arrays
+        Each segment's first word and its blocks a side (``layout``).
+    cells : int64 array
+        Each segment's cells a side (``layout``): how many segments there are.
+    i, j, k : int
+        The particle's cell (k is 0 in 2D).
     """
     w, b = index(dim, 0, blocks[0], i, j, k)
     fresh = words[w] == np.uint64(0)

@@ -33,7 +33,18 @@ def seed_stream(rng):
 
 @inline
 def xo(s0, s1, s2, s3):
-    """xoshiro256+ step on a state kept in registers: new state and a double in [0, 1)."""
+    """xoshiro256+ step on a state kept in registers: new state and a double in [0, 1).
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The generator's state, passed as scalars so that a hot loop keeps it in registers.
+
+    Returns
+    -------
+    tuple
+        The next state ``s0, s1, s2, s3`` and the double drawn.
+    """
     r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
     t = s1 << np.uint64(17)
     s2 ^= s0
@@ -48,7 +59,20 @@ def xo(s0, s1, s2, s3):
 @inline
 def xdir(s0, s1, s2, s3, dim):
     """Uniform unit vector by rejection from the unit disk (2D: normalise;
-    3D: Marsaglia's map), without sin/cos; the state in registers."""
+    3D: Marsaglia's map), without sin/cos; the state in registers.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The stream's state (``xo``).
+    dim : int
+        The dimension, 2 or 3.
+
+    Returns
+    -------
+    tuple
+        The next state ``s0, s1, s2, s3`` and the vector's three components (the third 0 in 2D).
+    """
     while True:
         s0, s1, s2, s3, a = xo(s0, s1, s2, s3)
         s0, s1, s2, s3, b = xo(s0, s1, s2, s3)
@@ -187,6 +211,19 @@ def ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, radius):
 
     An exact jump where the ball about w that walk-on-spheres would take is smaller: the
     same law as walk-on-spheres inside the larger ball, in one draw.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The stream's state (``xo``).
+    dim : int
+        The dimension, 2 or 3.
+    w : float64 (3,)
+        The walker's position, moved in place.
+    c0, c1, c2 : float
+        The ball's centre.
+    radius : float
+        The ball's radius.
     """
     d0, d1, d2 = w[0] - c0, w[1] - c1, w[2] - c2
     inner = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)

@@ -291,8 +291,17 @@ def fit_dimension(
     ----------
     scales, counts : array_like
         Output of ``box_counts``.
-    min_scale, max_fraction, min_decades, min_points, flat_tolerance
-        The range and flatness rules above.
+    min_scale : float
+        Smallest admissible box side, in particle sizes.
+    max_fraction : float
+        Largest admissible box side, as a fraction of the set's extent.
+    min_decades : float
+        Narrowest window fitted, in decades of box side.
+    min_points : int
+        Fewest sides in the window fitted.
+    flat_tolerance : float
+        Change of the local slope across a window, beyond twice its standard
+        error, that still counts as flat (module docstring).
 
     Returns
     -------
@@ -393,8 +402,20 @@ def fit_mass_radius(
         ``radius_of_gyration`` gives it.
     n : array_like of int, optional
         The counts of ``rg``, increasing (default ``1, 2, ..., len(rg)``).
-    start_fraction, min_count, per_octave, min_decades, min_points, flat_tolerance
-        The sampling, range and flatness rules above.
+    start_fraction : float
+        End of the transient, as a fraction of the largest count
+        (``mass_radius_counts``).
+    min_count : int
+        Fewest particles the history is read from.
+    per_octave : int
+        Counts sampled per factor two of N.
+    min_decades : float
+        Narrowest window fitted, in decades of N.
+    min_points : int
+        Fewest sampled counts in the window fitted.
+    flat_tolerance : float
+        Change of the local slope across a window, beyond twice its standard
+        error, that still counts as flat (module docstring).
 
     Returns
     -------
