@@ -105,7 +105,7 @@ def test_a_kernels_parameters_section_names_exactly_its_arguments(module, name, 
 def named_in_text(function):
     """The arguments of ``function`` that its docstring names nowhere (as a word of its own)."""
     doc = inspect.getdoc(function) or ""
-    return [a for a in arguments(function) if not re.search(r"(?<![\w.])%s(?!\w)" % re.escape(a), doc)]
+    return [a for a in arguments(function) if not re.search(rf"(?<![\w.]){re.escape(a)}(?!\w)", doc)]
 
 
 NOT_YET = {
