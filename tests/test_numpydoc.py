@@ -108,54 +108,13 @@ def named_in_text(function):
     return [a for a in arguments(function) if not re.search(rf"(?<![\w.]){re.escape(a)}(?!\w)", doc)]
 
 
-NOT_YET = {
-    # (module, kernel): the small helpers whose arguments still lean on a module-wide convention
-    # (dim, the register stream s0..s3, the map's words/start/blocks); issue 70 item 4, left to do.
-    ("dlasweep.kernels.centres", "_lower_rows"), ("dlasweep.kernels.centres", "_centre_lower"),
-    ("dlasweep.kernels.centres", "level_lower"), ("dlasweep.kernels.centres", "levels_from_held"),
-    ("dlasweep.kernels.centres", "centre_gap"),
-    ("dlasweep.kernels.lattice.field", "field_place"), ("dlasweep.kernels.lattice.field", "field_value"),
-    ("dlasweep.kernels.lattice.field", "field_raise"),
-    ("dlasweep.kernels.lattice.parents", "_box"), ("dlasweep.kernels.lattice.parents", "_slot"),
-    ("dlasweep.kernels.lattice.parents", "_site"), ("dlasweep.kernels.lattice.parents", "_earliest_neighbour"),
-    ("dlasweep.kernels.lattice.words", "fine2"),
-    ("dlasweep.kernels.maps", "_no_advice"), ("dlasweep.kernels.maps", "_keep"),
-    ("dlasweep.kernels.maps", "layout"), ("dlasweep.kernels.maps", "tile_number"),
-    ("dlasweep.kernels.maps", "tiled"), ("dlasweep.kernels.maps", "block_word"),
-    ("dlasweep.kernels.maps", "index"), ("dlasweep.kernels.maps", "carry"),
-    ("dlasweep.kernels.maps", "untiled"), ("dlasweep.kernels.maps", "allocate"),
-    ("dlasweep.kernels.maps", "field_cell"), ("dlasweep.kernels.maps", "field_tiles"),
-    ("dlasweep.kernels.maps", "field_size"), ("dlasweep.kernels.maps", "field_tile"),
-    ("dlasweep.kernels.maps", "pyramid_levels"), ("dlasweep.kernels.maps", "pyramid_starts"),
-    ("dlasweep.kernels.maps", "pyramid_allocate"),
-    ("dlasweep.kernels.model", "sticks_xo"),
-    ("dlasweep.kernels.offlattice.celllist", "_cell_of"), ("dlasweep.kernels.offlattice.celllist", "_move_rows"),
-    ("dlasweep.kernels.offlattice.celllist", "empty_heads"), ("dlasweep.kernels.offlattice.celllist", "_span"),
-    ("dlasweep.kernels.offlattice.grid", "_allocate_maps"), ("dlasweep.kernels.offlattice.grid", "_mark_levels"),
-    ("dlasweep.kernels.offlattice.grid", "_empty_grid"),
-    ("dlasweep.kernels.offlattice.grid", "_first_in_coarse_cell"),
-    ("dlasweep.kernels.offlattice.grid", "walk_geometry"),
-    ("dlasweep.kernels.walk", "unit_vector"), ("dlasweep.kernels.walk", "direction"),
-    ("dlasweep.kernels.walk", "return_to_sphere"), ("dlasweep.kernels.walk", "return_to_plane"),
-}
-"""Kernels whose docstrings do not yet name every argument: each still fails (``test_not_yet_is_only_what_fails``),
-so that the list only shrinks."""
-
-UNDOCUMENTED = [k for k in KERNELS if not documented(k[2]) and (k[0], k[1]) not in NOT_YET]
+UNDOCUMENTED = [k for k in KERNELS if not documented(k[2])]
 
 
 @pytest.mark.parametrize("module, name, function", UNDOCUMENTED, ids=[f"{m}.{n}" for m, n, _ in UNDOCUMENTED])
 def test_a_kernel_without_a_parameters_section_names_every_argument(module, name, function):
     """A small helper may say its arguments in its text (``x``, ``dim``) rather than in a Parameters section."""
     assert not named_in_text(function), f"{module}.{name}: {named_in_text(function)} not named"
-
-
-def test_not_yet_is_only_what_fails():
-    kernels = {(m, n): f for m, n, f in KERNELS}
-    assert NOT_YET <= set(kernels)
-    done = [k for k in sorted(NOT_YET) if documented(kernels[k]) == arguments(kernels[k])
-            or not documented(kernels[k]) and not named_in_text(kernels[k])]
-    assert not done, f"documented now: drop them from NOT_YET: {done}"
 
 
 def test_the_checks_can_fail():

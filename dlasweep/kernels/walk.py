@@ -97,7 +97,10 @@ def uniform(rs):
 
 @jit
 def unit_vector(rs, dim, out):
-    """A uniform unit vector into ``out[:3]`` from the stream state ``rs``."""
+    """A uniform unit vector into ``out[:3]`` from the stream state ``rs``.
+
+    ``dim`` is the dimension, 2 or 3 (``out[2]`` is 0 in 2D).
+    """
     rs[0], rs[1], rs[2], rs[3], out[0], out[1], out[2] = xdir(rs[0], rs[1], rs[2], rs[3], dim)
 
 
@@ -113,6 +116,8 @@ def direction(rng, dim, out):
 
     Rejection from the unit disk (Marsaglia's method in 3D) avoids the
     trigonometric calls, which cost more than the extra draws.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     while True:
         u = 2.0 * rng.random() - 1.0
@@ -182,6 +187,8 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
     False); otherwise the hitting point follows the Kelvin image of the
     interior Poisson kernel from the inverted point ``radius**2 / |pos|``.
     Returns True when the walker was placed on the sphere.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     r = np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
     if dim == 2:
@@ -254,6 +261,8 @@ def return_to_plane(rng, dim, pos, height, width):
     The half-space Poisson kernel: a Cauchy offset (2D) or its radial
     analogue (3D) with scale ``pos_up - height``; the periodic sides of width
     ``width`` wrap it, which gives the strip's exact kernel.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     up = dim - 1
     h = pos[up] - height
