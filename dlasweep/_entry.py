@@ -48,7 +48,7 @@ def run() -> None:
 @contextlib.contextmanager
 def loading():
     """Within, Ctrl-C is noted as well as raised, and raised again on leaving when a module loading
-    swallowed it (as 1 interrupt in about 400 while loading was, with no trace) or turned it into
+    swallows it (rarely, and with no trace: docs/performance.md) or turns it into
     another error (``RuntimeError`` from a class's ``__set_name__``): the command would otherwise run on.
 
     Only in the main thread, where Ctrl-C is not ignored (a shell's background job ignores it)."""

@@ -181,7 +181,7 @@ def _csv(cluster, f, mesh):
 
 def _rows(f, row, block):
     """Write each row of the 2D array ``block`` through the printf format ``row`` (one formatting call:
-    ``numpy.savetxt`` formats row by row, 5x slower)."""
+    ``numpy.savetxt`` formats row by row, several times slower: docs/performance.md, "Data files")."""
     if len(block):
         f.write(((row * len(block)) % tuple(block.ravel().tolist())).encode())
 

@@ -342,8 +342,8 @@ def _signals_held():
     """Ctrl-C and a SIGTERM handled in Python held back until the block's netCDF reads or writes end, then raised.
 
     netCDF4's indexing runs Python code under bare ``except:`` clauses (``utils._StartCountStride``):
-    a ``KeyboardInterrupt`` raised there was swallowed, and the sweep ran on to its end (about 1 interrupt
-    in 100 sent while clusters were written). Only the main thread runs signal handlers; other threads
+    a ``KeyboardInterrupt`` raised there is swallowed, and the sweep runs on to its end (docs/performance.md,
+    "Data files"). Only the main thread runs signal handlers; other threads
     need no hold.
     """
     if threading.current_thread() is not threading.main_thread():

@@ -58,7 +58,8 @@ class Parts:
     ``failed`` arrays index them, member ``<name>`` holds variable ``name`` of
     them all, flattened and concatenated, and ``<name>.shape`` the shape of
     each: a few zip members per part, since one per variable and cluster
-    took as long to write and read as 10^3-particle clusters take to grow.
+    would cost as much to write and read as small clusters take to grow
+    (docs/performance.md, "Sweeps").
     A cluster is finished when a part holds it without
     error; a failed one is computed again on resume, and a later part then
     holds it too. Knowing what is done reads only the indexes, once. The
