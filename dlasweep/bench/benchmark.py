@@ -335,7 +335,7 @@ def sweep_efficiency(spec: str, out, threads: int = SWEEP_THREADS) -> dict:
     embedded cluster, every task, writing the netCDF: ``process``), the
     kernels' own seconds growing the clusters, summed (``kernels``), the
     ideal (``kernels / threads``), ``ratio`` (process / ideal) and the
-    issue's ``target`` for the process (``RATIO_TARGET``).
+    ``target`` for the process (``RATIO_TARGET``).
     """
     import time
 

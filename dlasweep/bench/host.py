@@ -131,6 +131,6 @@ def _timed_walk(chain, at, reads):
 
 
 def latency_line(latency: dict) -> str:
-    """One line of ``read_latency``'s figures: 'host memory, ns a read waiting on the last: 0.25 MiB 7.1, ...'."""
+    """One line of ``read_latency``'s figures: 'host memory, ns a read waiting on the last: 0.25 MiB <ns>, ...'."""
     return "host memory, ns a read waiting on the last: " + ", ".join(
         f"{mib:g} MiB {ns:.1f}" for mib, ns in latency.items())
