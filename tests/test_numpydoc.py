@@ -117,6 +117,41 @@ def test_a_kernel_without_a_parameters_section_names_every_argument(module, name
     assert not named_in_text(function), f"{module}.{name}: {named_in_text(function)} not named"
 
 
+def _package_functions():
+    """(qualified name, function) of every function and method defined in ``dlasweep`` outside the kernels."""
+    for info in pkgutil.walk_packages(dlasweep.__path__, "dlasweep."):
+        if info.name.startswith("dlasweep.kernels") or info.name == "dlasweep.__main__":
+            continue
+        module = importlib.import_module(info.name)
+        for name, obj in vars(module).items():
+            if getattr(obj, "__module__", None) != module.__name__:
+                continue
+            if inspect.isfunction(obj):
+                yield f"{module.__name__}.{name}", obj
+            elif inspect.isclass(obj):
+                yield from ((f"{module.__name__}.{name}.{m}", f) for m, f in vars(obj).items() if inspect.isfunction(f))
+
+
+def spelt(function):
+    """The arguments of ``function`` as a Parameters section names them: ``*args``, ``**where``; no self."""
+    star = {inspect.Parameter.VAR_POSITIONAL: "*", inspect.Parameter.VAR_KEYWORD: "**"}
+    return [star.get(p.kind, "") + name for name, p in inspect.signature(function).parameters.items()
+            if name not in ("self", "cls")]
+
+
+SECTIONED = [(name, f) for name, f in _package_functions() if documented(f)]
+
+
+def test_the_package_functions_are_found():
+    assert len(SECTIONED) > 40
+
+
+@pytest.mark.parametrize("name, function", SECTIONED, ids=[name for name, _ in SECTIONED])
+def test_a_parameters_section_outside_the_kernels_names_exactly_its_arguments(name, function):
+    """Every Parameters section of the package, private helpers' too, lists the signature, in its order."""
+    assert documented(function) == spelt(function), name
+
+
 def test_the_checks_can_fail():
     def f(a, b):
         """One line.

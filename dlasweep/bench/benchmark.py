@@ -128,10 +128,10 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     full : bool
         Add ``FULL_COUNT`` for every model and end with the targets table
         (``target_table``).
-    huge : bool
-        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     quick : bool
         Only the smallest N of each model (a smoke test).
+    huge : bool
+        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     models : list of str, optional
         Only these of ``MODELS`` (default: all); the naive walk runs beside lattice-2d.
     echo : callable

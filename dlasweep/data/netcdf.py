@@ -153,6 +153,8 @@ def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
 
     Parameters
     ----------
+    ds : xarray.Dataset
+        The sweep's dataset without its clusters (``to_dataset``).
     clusters : iterable of (ndarray, ndarray, ndarray)
         Each stored cluster's points ``(n, dim)``, diffusion times and
         parents, in ``cluster`` order.
