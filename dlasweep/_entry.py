@@ -1,6 +1,6 @@
 """The ``dlasweep`` console command's entry: Ctrl-C at any moment ends it in one line.
 
-A command loads numpy, numba and netCDF (about 1.5 s): ``cli`` itself,
+A command loads numpy, numba and netCDF, which takes a noticeable moment: ``cli`` itself,
 then the modules of the command (``loading``); an interrupt then would
 otherwise print a traceback. The package's own ``__init__`` loads nothing
 heavy, so this module runs before any of it.
@@ -24,8 +24,9 @@ def run() -> None:
     did not catch.
 
     The process ends without tearing the interpreter down: freeing the modules
-    a command loads (numba and LLVM, dask, pandas) took 0.4 to 0.6 s at exit, as
-    long as a small sweep's clusters take to grow. By the time ``main`` returns
+    a command loads (numba and LLVM, dask, pandas) at exit takes about as long
+    as a small sweep's clusters take to grow (docs/performance.md, "The command
+    and its start"). By the time ``main`` returns
     every file is closed; the exit handlers still run and the output is flushed
     before the process ends.
     """
@@ -47,7 +48,7 @@ def run() -> None:
 @contextlib.contextmanager
 def loading():
     """Within, Ctrl-C is noted as well as raised, and raised again on leaving when a module loading
-    swallowed it (as 1 interrupt in about 400 while loading was, with no trace) or turned it into
+    swallows it (rarely, and with no trace: docs/performance.md) or turns it into
     another error (``RuntimeError`` from a class's ``__set_name__``): the command would otherwise run on.
 
     Only in the main thread, where Ctrl-C is not ignored (a shell's background job ignores it)."""

@@ -6,7 +6,7 @@ folders included, before any work starts. This is the only module that
 knows ``argv``.
 
 It loads numba, xarray and dask only in the commands that use them, so
-that ``--help`` and a bad option answer in about 0.4 s, not 1.8.
+that ``--help`` and a bad option answer without loading them (docs/performance.md).
 """
 
 from __future__ import annotations

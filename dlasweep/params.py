@@ -91,23 +91,24 @@ MIN_SIZE = 8
 """Smallest box side to grow in."""
 MAX_SIZE = 100_000
 """Largest box side: wider than any cluster of ``spec.MAX_PARTICLES`` (about 5e4 across in 2D); a box
-launch releases walkers on its walls, and at 1e5 the first 200 particles took 39 s."""
+launch releases walkers on its walls, and a wider box makes even the first particles slow to arrive
+(docs/performance.md, "Parameter bounds")."""
 MAX_STEP = 100.0
 """Largest Gaussian step (particle diameters). A step far longer than the cluster jumps over it: a walker
-returned to the launch circle hits with a chance of about 1 / step**2 per step (200 particles: 1.5 s at 100,
-18 s at 1000; at 1e9, never)."""
+returned to the launch circle hits with a chance of about 1 / step**2 per step (at 1e9, never; docs/performance.md,
+"Parameter bounds")."""
 MIN_STICKINESS = 1e-4
-"""Smallest stickiness: a particle takes about 1/stickiness contacts to stick (200 off-lattice particles:
-5 s at 1e-4; at 1e-6 over a minute; at 1e-300, never)."""
+"""Smallest stickiness: a particle takes about 1/stickiness contacts to stick (at 1e-300, never;
+docs/performance.md, "Parameter bounds")."""
 MAX_RADIUS_FACTOR = 100.0
 """Largest launch_factor, launch_margin and kill_factor: farther launch and kill circles give the same
 clusters (the return to the launch circle is exact) more slowly, and at 1e200 the walk's squared radii
 overflow to inf and it never ends."""
 MAX_WALKERS = 1_000_000
-"""Most lockstep walkers (their positions: 24 MB)."""
+"""Most lockstep walkers (their positions: 24 bytes each)."""
 MAX_NOISE_REDUCTION = 1000
-"""Largest noise_reduction: a particle takes that many walkers (at 1000, 2D lattice 1e4 particles: about 1e7
-walks)."""
+"""Largest noise_reduction: a particle takes that many walkers, so a cluster of N particles takes
+about 1000 N walks."""
 MIN_CONTACT_DISTANCE = 0.5
 """Smallest contact_distance: particles come no closer than it, so that the walk's neighbour lists
 (``kernels.offlattice.walker.LCAP_CLOSE``) hold every centre within their radius (3D: about 1600 at 0.5)."""

@@ -5,7 +5,7 @@ own, ``REPEATS`` times below ``HUGE_COUNT`` (the median kept); numba
 compilation is excluded by growing a small cluster first (the kernels are
 cached on disk). The naive baseline (single steps everywhere, a
 kill circle at twice the launch radius) runs at small N beside the exact
-method, so the gain is a ratio measured on the same machine at the same time.
+method, so the gain is a ratio taken on the same machine at the same time.
 """
 
 from __future__ import annotations
@@ -73,15 +73,10 @@ FULL_COUNT = 10_000_000
 HUGE_COUNT = 100_000_000
 """``--huge`` adds this N for the 2D models (tens of minutes each)."""
 REPEATS = 3
-"""Fresh runs of each N below ``HUGE_COUNT``, of which the bench keeps the median time: one
-2D off-lattice cluster of 1e5 took 0.543, 0.434 and 0.460 s in three runs on one machine,
-enough to move a cost exponent from 1e5 to 1e7 by 0.03; the same 3D lattice cluster of 1e7
-(seed 1, 116.1 steps a particle each time) took 73.8, 77.7 and 86.3 s in three benches on one
-host, a cost exponent of 1.09 to 1.125, and 81.9 to 89.4 s in five runs within 70 minutes, as the
-host's other tenants took more of its last-level cache and memory (reads of 64 MiB waiting on the
-last from 105 to 154 ns; ``host.read_latency``). With ``FULL_COUNT``, the first N of
-``SCALING`` runs as often again after it, so that its runs bracket the long one: a 2D lattice
-cluster of 1e5 took 0.38 to 0.55 s in six runs within a minute on one machine, and the host's
+"""Fresh runs of each N below ``HUGE_COUNT``, of which the bench keeps the median time: the runs of
+one cluster spread by more than a cost exponent's margin, as the host's other tenants take its cache
+and memory (docs/performance.md, "Benchmark and host"). With ``FULL_COUNT``, the first N of
+``SCALING`` runs as often again after it, so that its runs bracket the long one, since the host's
 speed drifts over the minutes between a model's first runs and its last. The cost exponent is
 given with the range its fit takes from the fastest and slowest runs of each N
 (``cost_exponent_range``)."""
@@ -143,10 +138,10 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     full : bool
         Add ``FULL_COUNT`` for every model and end with the targets table
         (``target_table``).
-    huge : bool
-        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     quick : bool
         Only the smallest N of each model (a smoke test).
+    huge : bool
+        Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     models : list of str, optional
         Only these of ``MODELS`` (default: all); the naive walk runs beside lattice-2d.
     echo : callable
@@ -233,8 +228,8 @@ def _host_reads(when: str) -> dict:
 
 
 def _host_cell(run: dict, reads: str) -> str:
-    """One of the host's read times about a run (``BESIDE_A_RUN``), before>after, in ns: '14>133' within
-    16 MiB names a run the host's neighbours slowed."""
+    """One of the host's read times about a run (``BESIDE_A_RUN``), before>after, in ns: a read slower after
+    than before names a run the host's neighbours slowed."""
     return f"{run[reads + '_before']:.0f}>{run[reads + '_after']:.0f}"
 
 
@@ -334,13 +329,13 @@ root_seed = 1
 SWEEP_THREADS = 2
 SWEEPS = [(1000, [100, 1000]), (64, [1000, 10_000]), (32, [10_000, 100_000]), (10_000, [1000])]
 """Sweeps of 2D lattice clusters whose whole-process time ``sweep_ratios`` sets
-against their kernels' (issue 11): seeds and particle counts."""
+against their kernels': seeds and particle counts."""
 RATIO_TARGET = (1.25, 2.0)
 """A sweep process should take at most 1.25 x ideal + 2 s (interpreter, imports, embedded cluster)."""
 
 
 def sweep_spec(seeds: int, counts) -> str:
-    """A 2D lattice sweep of ``seeds`` clusters measured at ``counts``."""
+    """The spec (TOML text) of a 2D lattice sweep of ``seeds`` clusters, each recorded at ``counts``."""
     return (f'name = "bench"\n[grid]\nn_particles = {list(counts)}\nseeds = {seeds}\n'
             f'[model]\nmodel = "lattice"\ndim = 2\n[run]\nroot_seed = 1\n')
 
@@ -352,7 +347,7 @@ def sweep_efficiency(spec: str, out, threads: int = SWEEP_THREADS) -> dict:
     embedded cluster, every task, writing the netCDF: ``process``), the
     kernels' own seconds growing the clusters, summed (``kernels``), the
     ideal (``kernels / threads``), ``ratio`` (process / ideal) and the
-    issue's ``target`` for the process (``RATIO_TARGET``).
+    ``target`` for the process (``RATIO_TARGET``).
     """
     import time
 
@@ -420,7 +415,7 @@ def analysis_bench(echo=print) -> dict:
     """Time the measurement of a 1e7-particle 2D set and the report of a 64-cluster sweep.
 
     Growing one 1e7-particle cluster takes minutes, so a stand-in is
-    measured: 100 translated copies (10 x 10, 1.25 cluster extents apart) of
+    timed: 100 translated copies (10 x 10, 1.25 cluster extents apart) of
     one 1e5-particle DLA cluster, lattice and off-lattice. Its extent (about
     16 000, against about 20 000 for one 1e7 cluster) and its box occupancy
     are close to a 1e7 cluster's, and they set the cost of box counting; the

@@ -1,7 +1,7 @@
 """The benchmark's chart: kernel time against N, log-log, one line per model (``dlasweep bench``'s ``bench.png``).
 
 Drawn in the report's style (``figures.new_figure``); reads what
-``benchmark.run_bench`` measured and computes nothing.
+``benchmark.run_bench`` recorded and computes nothing.
 """
 
 from __future__ import annotations

@@ -4,10 +4,10 @@ A walker reads the grids near it at places it cannot know ahead, each read
 waiting on the last. While the grids fit the caches such a read costs a few
 nanoseconds; once they outgrow them, a trip to memory. Where that happens
 and what it costs are the host's, not the kernel's, and they move a cost
-exponent (``targets.cost_exponent``) by more than its targets' margins: the same
-kernels measured 1.066 and 1.129 (2D lattice, 1e5 to 1e7) on two hosts a day
-apart. ``dlasweep bench`` and ``workflows/cost_exponent.py`` measure it in the
-same run as their clusters, so that rows from different hosts can be told apart.
+exponent (``targets.cost_exponent``) by more than its targets' margins
+(docs/performance.md, "Benchmark and host"). ``dlasweep bench`` and
+``workflows/cost_exponent.py`` read it in the same run as their clusters, so
+that rows from different hosts can be told apart.
 """
 
 from __future__ import annotations
@@ -39,15 +39,25 @@ def read_latency(working_sets=WORKING_SETS, reads: int = READS, rounds: int = RO
 
     A whole lap of the cycle comes first, and each walk goes on where the last
     ended, so that every timed read is of the line the chain read longest ago:
-    the set read is the whole set even where ``reads`` is fewer than its lines.
-    Before, every walk began at the chain's start, and one of fewer reads than
-    lines read only its first ``reads`` lines again: ``shared_cache``'s reads
-    (``READS // 10``) of 16 MiB read 6.1 MiB, those of 64 MiB 6.1 MiB strewn
-    over 64 (bench.nc's ``host_read_*`` and ``memory_read_*`` before this
-    change; its closing ``host_read_ns``, of ``READS``, read every set to 61
-    MiB whole, with ``--quick`` to 6.1). On one host at one
-    moment: 16 MiB in 42.1 to 46.5 ns a read that way, 140.7 a whole lap; 4,
-    6 and 8 MiB 34.4, 34.7 and 37.3; 12 MiB 120.4.
+    the set read is the whole set even where ``reads`` is fewer than its lines
+    (a walk that starts again at the chain's start reads only its first
+    ``reads`` lines, a set that may fit a cache the whole set does not).
+
+    Parameters
+    ----------
+    working_sets : sequence of float
+        The sizes of the sets read, in MiB, each timed apart.
+    reads : int
+        Reads timed in each walk (a round).
+    rounds : int
+        Timed walks at each set; their median is kept.
+    seed : int
+        Seed of the random order of the chain's lines.
+
+    Returns
+    -------
+    dict
+        Nanoseconds a read (float) by working set in MiB (float).
     """
     rng = np.random.default_rng(seed)
     latency = {}
@@ -67,24 +77,30 @@ RUN_SET = 16.0
 """MiB: the working set ``dlasweep bench`` reads just before and after each run (``shared_cache``)."""
 MEMORY_SET = 64.0
 """MiB: the working set past any last-level cache that ``dlasweep bench`` also reads beside each run:
-the memory a grid that outgrew the cache waits on. Neither read orders the 3D lattice cluster of 1e7
-(116.1 steps a particle each time) on a shared host: in three ``bench --huge`` runs of one afternoon
-its median run took 86.5, 85.4 and 78.0 s beside 16 MiB reads of 14>33, 24>31 and 104>20 ns
-(before>after) and 64 MiB reads of 103>117, 107>102 and 145>70 (each 6.1 MiB of its set, as
-``read_latency`` read short walks then); 16 MiB reads of 14 to 20 ns came
-beside 80.2 to 83.0 s, against 73.8 in the same steps hours before. They tell which runs shared
-their host, not by how much."""
+the memory a grid that outgrew the cache waits on. The two reads tell which runs shared their host,
+not by how much (docs/performance.md, "Benchmark and host")."""
 
 
 def shared_cache(mib: float = RUN_SET, reads: int = READS // 10) -> float:
     """Nanoseconds a read within ``mib`` MiB: whether the last-level cache is the process's, now (past
     it, ``MEMORY_SET``: what a read from memory costs, now).
 
-    A 3D grid of 1e7 spans some 46 MiB of written cache lines. On a host with
-    others on it, the last-level cache held 16 MiB at 14 ns a read at one hour
-    and 4 MiB the next (8 and 16 MiB then at 130 to 140 ns), and the same 3D
-    lattice cluster of 1e7 took 104 s against 74 in the same steps. Read beside
-    a long run, this tells a quiet machine from a shared one.
+    The share of the last-level cache a process gets moves with the other
+    processes of its host, and a large cluster's speed with it (docs/performance.md,
+    "Benchmark and host"). Read beside a long run, this tells a quiet machine
+    from a shared one.
+
+    Parameters
+    ----------
+    mib : float
+        The working set read, in MiB.
+    reads : int
+        Reads timed in each of ``read_latency``'s walks.
+
+    Returns
+    -------
+    float
+        Nanoseconds a read.
     """
     return read_latency((mib,), reads=reads)[float(mib)]
 
@@ -115,6 +131,6 @@ def _timed_walk(chain, at, reads):
 
 
 def latency_line(latency: dict) -> str:
-    """One line of ``read_latency``'s figures: 'host memory, ns a read waiting on the last: 0.25 MiB 7.1, ...'."""
+    """One line of ``read_latency``'s figures: 'host memory, ns a read waiting on the last: 0.25 MiB <ns>, ...'."""
     return "host memory, ns a read waiting on the last: " + ", ".join(
         f"{mib:g} MiB {ns:.1f}" for mib, ns in latency.items())

@@ -1,4 +1,4 @@
-"""Issue 25's targets, and the fits a benchmark's runs are held to: the cost
+"""The benchmark's targets, and the fits a benchmark's runs are held to: the cost
 exponent (its range over the runs and its parts, steps and the cost of a
 step) and the table of each figure beside its target (``dlasweep bench --full``).
 """
@@ -21,7 +21,7 @@ MODELS = {
 """The models ``dlasweep bench`` grows, by the names its targets, tables and ``--model`` use. This
 module loads neither xarray nor numba: the CLI reads the names while it builds its options."""
 PARENT_BYTES = 4
-"""Each particle's parent (an int32), which issue 25's memory targets allow beside their own."""
+"""Each particle's parent (an int32), which the memory targets allow beside their own."""
 TARGETS = {
     "lattice-2d": {"seconds": {10**7: 60, 10**8: 900}, "bytes": {10**7: 20 + PARENT_BYTES, 10**8: 20 + PARENT_BYTES},
                    "exponent": 1.06},
@@ -30,7 +30,7 @@ TARGETS = {
     "lattice-3d": {"seconds": {10**7: 180}, "bytes": {10**7: 48 + PARENT_BYTES}, "exponent": 1.10},
     "offlattice-3d": {"seconds": {10**7: 300}, "bytes": {10**7: 48 + PARENT_BYTES}, "exponent": 1.10},
 }
-"""Issue 25's targets on one core: seconds to grow (compile excluded) and
+"""The targets on one core: seconds to grow (compile excluded) and
 memory added by growth per particle (bytes) at each N, and the cost exponent
 over ``SCALING``."""
 SCALING = (10**5, 10**7)
@@ -56,7 +56,7 @@ def power_label(n: int) -> str:
 
 
 def target_table(ds: xr.Dataset) -> list[str]:
-    """Issue 25's table: seconds at 1e7 and 1e8, memory added per particle
+    """The targets' table: seconds at 1e7 and 1e8, memory added per particle
     there, the cost exponent and the growth of steps per particle from 1e5
     to 1e7, each beside its target (markdown rows)."""
     from ..data.schema import plain

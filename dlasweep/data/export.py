@@ -39,7 +39,8 @@ STYLES = ("disks", "tree")
 """How a picture shows a cluster: its particles, or its tree (one line per Horton-Strahler branch)."""
 CHUNK = 1 << 16
 """Particles turned into text or bytes at a time (a sixteenth of it for meshes: 12 vertices and
-20 faces a particle): 1e6 particles to .ply peak at 8 MB of memory besides the cluster, to .csv at 18 MB."""
+20 faces a particle), so that a file's memory beside the cluster stays a few chunks' worth whatever its size
+(docs/performance.md, "Data files")."""
 RADIUS = 0.5
 """Radius of a particle's sphere: unit diameter, as the model's disks (and lattice sites)."""
 TUBE_RADIUS = 0.25
@@ -180,7 +181,7 @@ def _csv(cluster, f, mesh):
 
 def _rows(f, row, block):
     """Write each row of the 2D array ``block`` through the printf format ``row`` (one formatting call:
-    ``numpy.savetxt`` formats row by row, 5x slower)."""
+    ``numpy.savetxt`` formats row by row, several times slower: docs/performance.md, "Data files")."""
     if len(block):
         f.write(((row * len(block)) % tuple(block.ravel().tolist())).encode())
 

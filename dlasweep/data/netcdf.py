@@ -153,6 +153,8 @@ def with_clusters(ds: xr.Dataset, clusters) -> xr.Dataset:
 
     Parameters
     ----------
+    ds : xarray.Dataset
+        The sweep's dataset without its clusters (``to_dataset``).
     clusters : iterable of (ndarray, ndarray, ndarray)
         Each stored cluster's points ``(n, dim)``, diffusion times and
         parents, in ``cluster`` order.
@@ -177,31 +179,27 @@ def _cluster_columns(columns, points, times, parents) -> dict:
 PARTICLE_CHUNK = 1 << 16
 """Values per HDF5 chunk of a per-particle variable.
 
-Measured by ``workflows/ragged_encoding.py`` on 1000 lattice 2D clusters of
-10^5 (10^8 particles, 16 bytes each unpacked; a shared 2-core machine):
-write s / bytes per particle / open and read one cluster s, at zlib 1:
-2^14: 14.0 / 4.52 / 0.019; 2^16: 17.2 / 4.46 / 0.022; 2^18: 17.5 / 4.45 /
-0.037; 2^20: 18.4 / 4.44 / 0.053. Beyond 2^16 a file shrinks by under 0.5%
-while reading one cluster decompresses more that it does not need."""
+Larger chunks barely shrink a file, while reading one cluster decompresses more
+that it does not need (``workflows/ragged_encoding.py``; docs/performance.md,
+"Data files")."""
 PARTICLE_ZLIB = 1
 """zlib level of the per-particle variables (shuffled as ``shuffled`` says).
 
-Same measurement, 2^16 values per chunk: level 0 (shuffle only) 1.9 s and
-16.0 bytes per particle; 1: 17.2 s, 4.46; 4: 38.8 s, 4.20; 9 (2^14): 339 s,
-3.80. Level 1 takes 3.6x off the file for about 10% of the time the sweep
-takes to grow the clusters; higher levels save 6-15% more at 2-20x the time.
-Off-lattice (float64 positions, 24 bytes unpacked), 2^16: level 0 4.9 s, 24.0;
-1: 50.8 s, 15.05; 4: 55.1 s, 14.89."""
+Level 1 takes most of what zlib can take off a file for a small share of the
+time a sweep takes to grow its clusters; higher levels save little more at
+several times the time (docs/performance.md, "Data files")."""
 
 
 def shuffled(dtype) -> bool:
     """Whether a per-particle variable of this type is byte-shuffled before zlib: all but lattice sites.
 
-    Measured with zlib 1 on chunks of 2^16, ns per value and bytes per value,
-    shuffled against not: lattice x, 10,000 clusters of 10^3: 47 and 1.51
-    against 36 and 1.27; 10 of 10^5: 51 and 1.80 against 55 and 1.82.
-    Diffusion times 33-42 and 0.81-0.88 against 46-49 and 1.46-1.60;
-    off-lattice x (10 of 10^5) 153 and 7.03 against 198 and 7.67.
+    Shuffling makes diffusion times and off-lattice positions smaller and faster
+    to write; lattice sites it makes no smaller (docs/performance.md, "Data files").
+
+    Parameters
+    ----------
+    dtype : numpy dtype or str
+        The type of the variable's values.
     """
     return np.dtype(dtype) != np.dtype(ragged_dtype(True))
 
@@ -346,8 +344,8 @@ def _signals_held():
     """Ctrl-C and a SIGTERM handled in Python held back until the block's netCDF reads or writes end, then raised.
 
     netCDF4's indexing runs Python code under bare ``except:`` clauses (``utils._StartCountStride``):
-    a ``KeyboardInterrupt`` raised there was swallowed, and the sweep ran on to its end (about 1 interrupt
-    in 100 sent while clusters were written). Only the main thread runs signal handlers; other threads
+    a ``KeyboardInterrupt`` raised there is swallowed, and the sweep runs on to its end (docs/performance.md,
+    "Data files"). Only the main thread runs signal handlers; other threads
     need no hold.
     """
     if threading.current_thread() is not threading.main_thread():
@@ -447,7 +445,7 @@ def _coordinate(values, dtype=None) -> np.ndarray:
 
 
 def _positions(column) -> np.ndarray:
-    # no copy when the type is already right: 10^8 sites' columns are 400 MB each
+    # no copy when the type is already right: 10^8 sites' columns are 4e8 bytes each
     return column.astype(ragged_dtype(column.dtype.kind in "iu"), copy=False)
 
 

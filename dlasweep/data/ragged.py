@@ -39,7 +39,7 @@ def cluster_points(ds: xr.Dataset, index=None, **where) -> np.ndarray:
     # With dim swept, 2D clusters sit in the z = 0 plane of a 3D ragged array.
     axes = AXES[:_cluster_value(ds, "dim", index)]
     points = np.empty((stop - start, len(axes)), ds[axes[0]].dtype)
-    for a, name in enumerate(axes):  # a column at a time: 10^8 sites' columns are 400 MB each
+    for a, name in enumerate(axes):  # a column at a time: 10^8 sites' columns are 4e8 bytes each
         points[:, a] = ds[name][start:stop].values
     return points
 
@@ -49,7 +49,11 @@ def cluster_parents(ds: xr.Dataset, index=None, **where) -> np.ndarray:
 
     Parameters
     ----------
-    ds, index, where
+    ds : xarray.Dataset
+        As for ``cluster_points``.
+    index : int, optional
+        As for ``cluster_points``.
+    **where
         As for ``cluster_points``.
 
     Returns
@@ -78,7 +82,11 @@ def read_cluster(ds: xr.Dataset, index=None, **where):
 
     Parameters
     ----------
-    ds, index, where
+    ds : xarray.Dataset
+        As for ``cluster_points``.
+    index : int, optional
+        As for ``cluster_points``.
+    **where
         As for ``cluster_points``.
 
     Returns

@@ -1,6 +1,6 @@
 """What a dlasweep dataset holds: every variable's dims, type, units and CF attributes.
 
-Layout (README, "The dataset"): the measured quantities on dims
+Layout (README, "The dataset"): the measurement variables on dims
 ``(<swept params>..., size, n_particles, seed[, scale])``; the clusters as a
 CF contiguous ragged array, ``x``, ``y`` (``z``), ``diffusion_time`` and
 ``parent`` along ``particle`` with the count variable ``cluster_particles(cluster)``, whose
@@ -103,7 +103,7 @@ class Variable:
 
     @property
     def missing(self):
-        """The value of a not-yet-measured (or failed) entry: NaN for floats, 0 for counts."""
+        """The value of an entry not yet computed (or failed): NaN for floats, 0 for counts."""
         return np.nan if np.dtype(self.dtype).kind == "f" else 0
 
 

@@ -21,7 +21,7 @@ WATCH_SECONDS = 0.2
 STOP = threading.Event()
 """Set while an interrupted sweep closes its embedded cluster: a growth waiting in a worker's thread
 then raises ``Interrupted`` within ``WATCH_SECONDS``, so that closing, which joins those threads,
-does not wait for the kernels (a sweep of 3e6-particle clusters took 30 s to end after Ctrl-C)."""
+does not wait for the kernels, which run for as long as a cluster takes to grow (docs/performance.md, "Growth")."""
 
 
 class Interrupted(Exception):
@@ -36,7 +36,10 @@ INLINE_INCHES, INLINE_DPI = 4.5, 100
 class Cluster:
     """One grown cluster.
 
-    Attributes
+    ``grow`` makes it, and ``read_cluster`` from a sweep's file; its fields
+    are its constructor's parameters.
+
+    Parameters
     ----------
     points : ndarray, (n_grown, dim)
         Positions in attachment order (int32 on a lattice, float64 off it),
@@ -73,6 +76,7 @@ class Cluster:
 
     @property
     def n(self) -> int:
+        """Particles in the cluster (``len(points)``), the seed particles included."""
         return len(self.points)
 
     def _repr_png_(self) -> bytes:
@@ -214,10 +218,9 @@ def _watched(kernel, n, p, marks, rng, progress=None):
 
     Growth does not depend on the marks (they only read a clock), so more
     marks are passed, every n / ``WATCH_MARKS``, and the times it fills are
-    read as it goes. Watching costs nothing measurable: a 10^6 lattice
-    cluster grew in the same time watched as called directly. Without
+    read as it goes, so that watching a large growth costs it nothing. Without
     ``progress`` only ``marks`` are passed: setting up and reading the watch
-    marks took 0.3 to 0.5 ms a call, a tenth of a 10^3 lattice cluster's ``grow``.
+    marks would weigh on a small cluster's ``grow`` (docs/performance.md, "Growth").
     """
     if progress is None:
         (result,) = _waited(lambda: kernel(n, p, marks, [rng]))

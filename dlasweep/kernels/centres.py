@@ -135,7 +135,10 @@ def _lower_rows(field, dim, fw, rows, cap, shift, i, j, k):
     its value and the row table's (``rows``, by the place of (i, j, k) in its
     cell). Each row is a stretch of the table taken by a branch-free maximum
     the compiler vectorises (unsigned indices, as in ``lattice.field.field_lower``), a
-    tile's stretch at a time."""
+    tile's stretch at a time.
+
+    ``dim`` is the dimension, 2 or 3 (``k`` is 0 in 2D).
+    """
     reach, span = cap - 1, 2 * cap - 1
     m = (1 << shift) - 1
     last = (1 << maps.FIELD_TILE[dim]) - 1
@@ -164,6 +167,9 @@ def _centre_lower(field, dim, fw, i, j, k):
     its centre to the nearest particle's unit cell, rounded down and capped
     (``_centre_rows``), so that zero is the cap and an unwritten page costs no
     memory.
+
+    ``field`` is the centre field, ``fw`` coarse cells a side; ``dim`` is the dimension, 2 or 3 (``k``
+    is 0 in 2D).
     """
     _lower_rows(field, dim, fw, CENTRE_ROWS_2D if dim == 2 else CENTRE_ROWS_3D, CCAP[dim - 2], FS, i, j, k)
 
@@ -172,7 +178,10 @@ def _centre_lower(field, dim, fw, i, j, k):
 def level_lower(level, dim, fw, bi, bj, bk):
     """Record held cell (bi, bj, bk) of the level below in ``level``, a level of the centre
     pyramid ``fw`` cells a side: its cells within ``FCAP - 1`` take the distance from their
-    centres to it (``_level_rows``)."""
+    centres to it (``_level_rows``).
+
+    ``dim`` is the dimension, 2 or 3 (``bk`` is 0 in 2D).
+    """
     _lower_rows(level, dim, fw, LEVEL_ROWS_2D if dim == 2 else LEVEL_ROWS_3D, FCAP[dim - 2], _STEP[dim], bi, bj, bk)
 
 
@@ -180,7 +189,11 @@ def level_lower(level, dim, fw, bi, bj, bk):
 def levels_from_held(field, starts, width, dim):
     """Build the centre pyramid's levels above the first (``starts``: ``maps.pyramid_starts`` of a
     grid of side ``width``), each in one pass about every held cell of the level below: what
-    ``pyramid_lower`` builds a held cell at a time, for a grid whose first level is whole."""
+    ``pyramid_lower`` builds a held cell at a time, for a grid whose first level is whole.
+
+    ``field`` is the whole pyramid, its levels one after the other from ``starts``; ``dim`` is the
+    dimension, 2 or 3.
+    """
     bits = maps.FIELD_TILE[dim]
     per_tile = 1 << (dim * bits)
     for upper in range(2, len(starts) - 1):
@@ -250,7 +263,10 @@ def cell_centre(X, shift):
 
 @jit
 def centre_gap(X0, X1, X2, dim, shift):
-    """Distance from the grid point X to the centre of its cell of side ``2**shift``."""
+    """Distance from the grid point X to the centre of its cell of side ``2**shift``.
+
+    X is (``X0``, ``X1``, ``X2``), ``X2`` 0 in 2D; ``dim`` is the dimension, 2 or 3.
+    """
     d0 = X0 - cell_centre(X0, shift)
     d1 = X1 - cell_centre(X1, shift)
     d2 = X2 - cell_centre(X2, shift) if dim == 3 else 0.0

@@ -45,7 +45,10 @@ def _advise_huge_pages(address, nbytes):
 
 @jit
 def _no_advice(address, nbytes):
-    """Elsewhere than Linux: no advice (``madvise``'s flag numbers differ)."""
+    """Elsewhere than Linux: no advice (``madvise``'s flag numbers differ).
+
+    It takes ``address`` and ``nbytes``, as the Linux advice does, and ignores them.
+    """
 
 
 _advise = _advise_huge_pages if sys.platform.startswith("linux") else _no_advice
@@ -69,7 +72,10 @@ def _release(address, nbytes):
 
 @jit
 def _keep(address, nbytes):
-    """Elsewhere than Linux: nothing released."""
+    """Elsewhere than Linux: nothing released.
+
+    It takes ``address`` and ``nbytes``, as the Linux release does, and ignores them.
+    """
     return np.uintp(0), np.uintp(0)
 
 
@@ -170,7 +176,11 @@ def release(a, lo, hi):
 @jit
 def layout(dim, width, most=64):
     """Start word, blocks per axis and cells per axis of every segment (at most ``most``),
-    each segment a whole number of tiles."""
+    each segment a whole number of tiles.
+
+    ``dim`` is the dimension, 2 or 3 (blocks of 8x8 or 4x4x4 cells, a word each); ``width`` is segment
+    0's cells a side.
+    """
     block = 8 if dim == 2 else 4
     nseg = 1
     while (width >> nseg) >= 2 and nseg < most:
@@ -190,14 +200,20 @@ def layout(dim, width, most=64):
 
 @inline
 def tile_number(dim, tiles, ti, tj, tk):
-    """Number of tile (ti, tj, tk) of a grid of ``tiles`` tiles a side, tile after tile in raster order."""
+    """Number of tile (ti, tj, tk) of a grid of ``tiles`` tiles a side, tile after tile in raster order.
+
+    ``dim`` is the dimension, 2 or 3 (``tk`` is 0 in 2D).
+    """
     return ti + tiles * (tj + (tiles * tk if dim == 3 else 0))
 
 
 @inline
 def tiled(dim, bits, side, i, j, k):
     """Position of cell (i, j, k) of a grid of ``side`` cells a side stored in
-    square (cubic) tiles of ``2**bits`` cells a side, tile after tile."""
+    square (cubic) tiles of ``2**bits`` cells a side, tile after tile.
+
+    ``dim`` is the dimension, 2 or 3 (``k`` is 0 in 2D).
+    """
     last = (1 << bits) - 1
     tile = tile_number(dim, (side + last) >> bits, i >> bits, j >> bits, k >> bits)
     inner = (i & last) | ((j & last) << bits)
@@ -208,13 +224,19 @@ def tiled(dim, bits, side, i, j, k):
 
 @jit
 def block_word(dim, base, nb, bx, by, bz):
-    """The word holding block (bx, by, bz) of a segment starting at ``base``, ``nb`` blocks a side."""
+    """The word holding block (bx, by, bz) of a segment starting at ``base``, ``nb`` blocks a side.
+
+    ``dim`` is the dimension, 2 or 3 (``bz`` is 0 in 2D).
+    """
     return base + tiled(dim, TILE_BITS[dim], nb, bx, by, bz)
 
 
 @jit
 def index(dim, base, nb, i, j, k):
-    """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side."""
+    """Word and bit of cell (i, j, k) in a segment starting at word ``base``, ``nb`` blocks a side.
+
+    ``dim`` is the dimension, 2 or 3 (``k`` is 0 in 2D).
+    """
     if dim == 2:
         return block_word(2, base, nb, i >> 3, j >> 3, 0), (i & 7) | ((j & 7) << 3)
     return block_word(3, base, nb, i >> 2, j >> 2, k >> 2), (i & 3) | ((j & 3) << 2) | ((k & 3) << 4)
@@ -229,6 +251,8 @@ def carry(old, old_side, new, new_side, bits, shift, dim, packed=False):
     Only nonzero cells are written (unwritten pages stay free), a tile (a page or
     less) at a time, and each row of old tiles goes back to the OS once copied, so
     that the two grids take little more memory than the larger one.
+
+    ``dim`` is the dimension, 2 or 3.
     """
     tiles = (old_side + (1 << bits) - 1) >> bits
     cells = 2 if packed else 1  # cells an element
@@ -261,7 +285,10 @@ def carry(old, old_side, new, new_side, bits, shift, dim, packed=False):
 
 @inline
 def untiled(dim, bits, ti, tj, tk, inner):
-    """The cell at place ``inner`` of tile (ti, tj, tk) of tiles ``2**bits`` cells a side (``tiled``'s inverse)."""
+    """The cell at place ``inner`` of tile (ti, tj, tk) of tiles ``2**bits`` cells a side (``tiled``'s inverse).
+
+    ``dim`` is the dimension, 2 or 3 (the third index returned is 0 in 2D).
+    """
     m = (1 << bits) - 1
     return (ti << bits) | (inner & m), (tj << bits) | ((inner >> bits) & m), \
         ((tk << bits) | (inner >> (2 * bits))) if dim == 3 else 0
@@ -269,7 +296,21 @@ def untiled(dim, bits, ti, tj, tk, inner):
 
 @jit
 def test(words, dim, start, blocks, s, i, j, k):
-    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset)."""
+    """Whether cell (i, j, k) of segment ``s`` is set (indices already offset).
+
+    Parameters
+    ----------
+    words : uint64 array
+        The map's words, every segment one after the other (``allocate``).
+    dim : int
+        The dimension, 2 or 3.
+    start, blocks : int64 arrays
+        Each segment's first word and its blocks a side (``layout``).
+    s : int
+        The segment read.
+    i, j, k : int
+        The cell (k is 0 in 2D).
+    """
     w, b = index(dim, start[s], blocks[s], i, j, k)
     return (words[w] >> np.uint64(b)) & np.uint64(1) != np.uint64(0)
 
@@ -283,6 +324,19 @@ def mark(words, dim, start, blocks, cells, i, j, k):
     level from there up, so only the levels below are marked. Words are
     indexed here with scalars (``index``): a helper call that passes the
     arrays would cost atomic reference counting per cell.
+
+    Parameters
+    ----------
+    words : uint64 array
+        The map's words, every segment one after the other (``allocate``).
+    dim : int
+        The dimension, 2 or 3.
+    start, blocks : int64 arrays
+        Each segment's first word and its blocks a side (``layout``).
+    cells : int64 array
+        Each segment's cells a side (``layout``): how many segments there are.
+    i, j, k : int
+        The particle's cell (k is 0 in 2D).
     """
     w, b = index(dim, 0, blocks[0], i, j, k)
     fresh = words[w] == np.uint64(0)
@@ -303,7 +357,10 @@ def mark(words, dim, start, blocks, cells, i, j, k):
 
 @jit
 def allocate(dim, width, most=64):
-    """An empty grid of side ``width`` with at most ``most`` segments: (words, start, blocks, cells)."""
+    """An empty grid of side ``width`` with at most ``most`` segments: (words, start, blocks, cells).
+
+    ``dim`` is the dimension, 2 or 3 (``layout``).
+    """
     start, blocks, cells = layout(dim, width, most)
     return zeroed(start[-1], np.uint64), start, blocks, cells
 
@@ -320,25 +377,37 @@ line, are no faster: docs/performance.md)."""
 
 @jit
 def field_cell(dim, fw, ci, cj, ck):
-    """Index of cell (ci, cj, ck) in a field of ``fw`` cells a side, stored by tiles."""
+    """Index of cell (ci, cj, ck) in a field of ``fw`` cells a side, stored by tiles.
+
+    ``dim`` is the dimension, 2 or 3 (``ck`` is 0 in 2D).
+    """
     return tiled(dim, FIELD_TILE[dim], fw, ci, cj, ck)
 
 
 @inline
 def field_tiles(dim, fw):
-    """Tiles a side of a field of ``fw`` cells a side."""
+    """Tiles a side of a field of ``fw`` cells a side.
+
+    ``dim`` is the dimension, 2 or 3: it sets the tile's side (``FIELD_TILE``).
+    """
     return (fw + (1 << FIELD_TILE[dim]) - 1) >> FIELD_TILE[dim]
 
 
 @jit
 def field_size(dim, fw):
-    """Cells a field of ``fw`` cells a side holds, whole tiles."""
+    """Cells a field of ``fw`` cells a side holds, whole tiles.
+
+    ``dim`` is the dimension, 2 or 3: it sets the tile's side (``FIELD_TILE``).
+    """
     return (field_tiles(dim, fw) << FIELD_TILE[dim]) ** dim
 
 
 @jit
 def field_tile(dim, fw, ci, cj, ck):
-    """The tile of cell (ci, cj, ck) in a field of ``fw`` cells a side (``field_fill``'s ``held``)."""
+    """The tile of cell (ci, cj, ck) in a field of ``fw`` cells a side (``field_fill``'s ``held``).
+
+    ``dim`` is the dimension, 2 or 3 (``ck`` is 0 in 2D).
+    """
     t = FIELD_TILE[dim]
     return tile_number(dim, field_tiles(dim, fw), ci >> t, cj >> t, ck >> t)
 
@@ -353,7 +422,11 @@ of 1 saves no steps and takes more levels (docs/performance.md)."""
 @jit
 def pyramid_levels(dim, width, cap, most=64):
     """Levels of the pyramid of a grid of side ``width``: enough that the top
-    one's capped distance spans the grid, at most ``most``."""
+    one's capped distance spans the grid, at most ``most``.
+
+    ``dim`` is the dimension, 2 or 3 (``PYRAMID_STEP``); ``cap`` is the cap of every level's distances,
+    in its own cells.
+    """
     levels = 1
     while ((cap - 1) << (FIELD_SHIFT + PYRAMID_STEP[dim] * (levels - 1))) < width and levels < most:
         levels += 1
@@ -363,7 +436,11 @@ def pyramid_levels(dim, width, cap, most=64):
 @jit
 def pyramid_starts(dim, width, cap, most=64):
     """Where each level of the pyramid of a grid of side ``width`` starts in
-    its array (and the end)."""
+    its array (and the end).
+
+    ``dim``, ``cap`` and ``most`` are as ``pyramid_levels`` takes them: the dimension, the levels' cap
+    and the most levels.
+    """
     levels = pyramid_levels(dim, width, cap, most)
     start = np.zeros(levels + 1, np.int64)
     for level in range(levels):
@@ -380,5 +457,8 @@ def pyramid_allocate(dim, width, cap, most=64):
     starts at ``pyramid_starts(...)[l]``; level 0, the field, comes first. It
     is in small pages, as every ``zeroed`` array is (huge pages for this
     array alone gain nothing: docs/performance.md).
+
+    ``dim``, ``width``, ``cap`` and ``most`` are as ``pyramid_levels`` takes them: the dimension, the
+    grid's side, the levels' cap (every cell's first value) and the most levels.
     """
     return zeroed(pyramid_starts(dim, width, cap, most)[-1], np.uint8)

@@ -100,7 +100,7 @@ def sticks(stickiness, rng):
 @inline
 def sticks_xo(stickiness, s0, s1, s2, s3):
     """``sticks`` with the draw from the xoshiro256+ stream held in registers
-    (``s0`` .. ``s3``, ``walk.xo``): whether it sticks with probability
+    (``s0``, ``s1``, ``s2``, ``s3``, ``walk.xo``): whether it sticks with probability
     ``stickiness``, and the stream's new state.
 
     Inlined into the lattice walk's hot loop; written with one return, as

@@ -33,7 +33,18 @@ def seed_stream(rng):
 
 @inline
 def xo(s0, s1, s2, s3):
-    """xoshiro256+ step on a state kept in registers: new state and a double in [0, 1)."""
+    """xoshiro256+ step on a state kept in registers: new state and a double in [0, 1).
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The generator's state, passed as scalars so that a hot loop keeps it in registers.
+
+    Returns
+    -------
+    tuple
+        The next state ``s0, s1, s2, s3`` and the double drawn.
+    """
     r = np.float64((s0 + s3) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
     t = s1 << np.uint64(17)
     s2 ^= s0
@@ -48,7 +59,20 @@ def xo(s0, s1, s2, s3):
 @inline
 def xdir(s0, s1, s2, s3, dim):
     """Uniform unit vector by rejection from the unit disk (2D: normalise;
-    3D: Marsaglia's map), without sin/cos; the state in registers."""
+    3D: Marsaglia's map), without sin/cos; the state in registers.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The stream's state (``xo``).
+    dim : int
+        The dimension, 2 or 3.
+
+    Returns
+    -------
+    tuple
+        The next state ``s0, s1, s2, s3`` and the vector's three components (the third 0 in 2D).
+    """
     while True:
         s0, s1, s2, s3, a = xo(s0, s1, s2, s3)
         s0, s1, s2, s3, b = xo(s0, s1, s2, s3)
@@ -73,7 +97,10 @@ def uniform(rs):
 
 @jit
 def unit_vector(rs, dim, out):
-    """A uniform unit vector into ``out[:3]`` from the stream state ``rs``."""
+    """A uniform unit vector into ``out[:3]`` from the stream state ``rs``.
+
+    ``dim`` is the dimension, 2 or 3 (``out[2]`` is 0 in 2D).
+    """
     rs[0], rs[1], rs[2], rs[3], out[0], out[1], out[2] = xdir(rs[0], rs[1], rs[2], rs[3], dim)
 
 
@@ -89,6 +116,8 @@ def direction(rng, dim, out):
 
     Rejection from the unit disk (Marsaglia's method in 3D) avoids the
     trigonometric calls, which cost more than the extra draws.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     while True:
         u = 2.0 * rng.random() - 1.0
@@ -158,6 +187,8 @@ def return_to_sphere(rng, dim, pos, radius, scratch):
     False); otherwise the hitting point follows the Kelvin image of the
     interior Poisson kernel from the inverted point ``radius**2 / |pos|``.
     Returns True when the walker was placed on the sphere.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     r = np.sqrt(pos[0] ** 2 + pos[1] ** 2 + pos[2] ** 2)
     if dim == 2:
@@ -187,6 +218,19 @@ def ball_exit(s0, s1, s2, s3, dim, w, c0, c1, c2, radius):
 
     An exact jump where the ball about w that walk-on-spheres would take is smaller: the
     same law as walk-on-spheres inside the larger ball, in one draw.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The stream's state (``xo``).
+    dim : int
+        The dimension, 2 or 3.
+    w : float64 (3,)
+        The walker's position, moved in place.
+    c0, c1, c2 : float
+        The ball's centre.
+    radius : float
+        The ball's radius.
     """
     d0, d1, d2 = w[0] - c0, w[1] - c1, w[2] - c2
     inner = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
@@ -217,6 +261,8 @@ def return_to_plane(rng, dim, pos, height, width):
     The half-space Poisson kernel: a Cauchy offset (2D) or its radial
     analogue (3D) with scale ``pos_up - height``; the periodic sides of width
     ``width`` wrap it, which gives the strip's exact kernel.
+
+    ``rng`` is the numpy Generator drawn from; ``dim`` is the dimension, 2 or 3.
     """
     up = dim - 1
     h = pos[up] - height

@@ -35,8 +35,8 @@ def ordered(points, high):
 
     In that order the bits a particle sets lie in rows near the previous
     particle's, so the bitmaps are read from cache, not memory; a set whose
-    bitmaps are small is not worth the sort (it took 5% of the measurement
-    of a cluster of 10^3).
+    bitmaps are small is not worth the sort, which is a noticeable share of
+    a small cluster's measurement (docs/performance.md, "Measures").
     """
     rows = 1
     for a in range(len(high) - 1):

@@ -66,17 +66,16 @@ alone is counted in bands of its rows."""
 _PIECE_BYTES = 1 << 29
 """Most bytes (512 MiB) of a prefix's shifted, first-axis ordered copy that the marking takes at a time
 (``pieces``); a larger prefix is marked in pieces, each copied anew from the prefix for each marking.
-Measured on 9e7 sites (a 1e7 cluster, each site made 3 x 3), box counting in CPU s: one piece 119,
-pieces of 16 Mi particles 168; beside each other, one piece 117.6, two of 512 MiB 146.0. Filling a
-piece takes a pass over the whole prefix."""
+Filling a piece takes a pass over the whole prefix, so pieces are as large as memory allows
+(docs/performance.md, "Measures")."""
 
 _BANDS_MOST = 64
 """Most bands a grid is counted in (a pass over the particles each); a grid that needs more belongs to a
 sparse set, whose boxes are sorted instead."""
 
 _STRIP_WORDS_PER_SITE = 2
-"""Integer sites are put in strips when a strip has fewer words than this per site. Measured: a grid costs
-about 4 ns a site when marked from the sites, 1.7 ns a strip word when merged from the strips."""
+"""Integer sites are put in strips when a strip has fewer words than this per site: a strip word merged
+costs about half what a site marked does (docs/performance.md, "Measures")."""
 
 ROUTES = ("one box", "halved", "strips of sites", "one pass", "a few grids a pass", "sorted", "bands")
 """How a side is counted, by code (``PrefixBoxes.routes``): the set fits one box; its grids halved from those

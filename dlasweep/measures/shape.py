@@ -178,7 +178,7 @@ def time_depth_pairs(points, times, edges):
     The depth is the distance from the seed over the largest (at least 1),
     binned by ``edges`` (``len(edges) - 1`` bins, as ``np.digitize`` gives
     them, clipped). ``np.unique``'s answer without an array of keys: a 1e8
-    cluster's would take 800 MB, and its sort as much again.
+    cluster's would take 8e8 bytes, and its sort as much again.
 
     Parameters
     ----------

@@ -2,8 +2,8 @@
 
 Pure functions of a parent array (``Cluster.parents``: each particle's
 parent precedes it, -1 for a root), compiled loops in index order, so that
-no recursion is needed: 10^7 particles take 2 to 4 s (a random tree, a
-path; a shared 2-core machine).
+no recursion is needed and a path of 10^7 particles is as easy as a bushy
+tree (docs/performance.md, "Measures").
 
 Horton-Strahler order: a leaf has order 1; a particle whose children's
 highest order k is reached by two or more of them has order k + 1, else k.

@@ -388,10 +388,12 @@ def draw_cluster(points, params, path, *, seed=None, status=_params.Status.ok.na
 
     Parameters
     ----------
-    points, params, seed, status, inches, dpi
+    points, params
         As for ``cluster_figure``.
     path : str or Path
         ``.png``, or ``.svg`` (disks as vector shapes, a lattice as its image).
+    seed, status, inches, dpi
+        As for ``cluster_figure``.
     """
     path = Path(path)
     fig = cluster_figure(points, params, seed=seed, status=status, inches=inches, dpi=dpi,

@@ -1,6 +1,6 @@
 """Branch statistics of a sweep's stored clusters, over seeds: what ``summarise`` adds of the trees.
 
-Each stored cluster (grown to the sweep's largest count) is measured as a
+Each stored cluster (grown to the sweep's largest count) is read as a
 tree (``tree.branching``); per configuration, the bifurcation ratio and the
 chemical-distance dimension are the means over its clusters with the 95%
 CI of the mean (Student's t, ``fit.ensemble``), and the branch counts per

@@ -19,12 +19,9 @@ MIN_CI_SEEDS = 3
 Over 2 seeds the spread has one degree of freedom: the interval would be
 +-12.7 standard errors (``fit.t95(1)``), wider than any difference in D it
 could resolve, and its coverage would rest wholly on the normality of one
-difference. From 3 seeds the t-scaled interval holds: measured on 600
-ensembles of growth histories of known D each (tests/test_analysis.py,
-lognormal seed-to-seed noise) it covers the true D in 95.0%, 93.8%, 94.8%,
-94.5%, 95.7% and 95.8% of ensembles of 3, 4, 6, 8, 10 and 16 seeds, where
-the percentile bootstrap it replaced covered 71%, 78%, 86%, 89%, 90% and
-93%."""
+difference. From 3 seeds the t-scaled interval holds its coverage on
+ensembles of growth histories of known D (tests/test_analysis.py; the figures
+in docs/performance.md, "Statistics")."""
 
 START_FRACTION = 0.05
 """End of the transient of a growth history, as a fraction of its largest count (``fit.mass_radius_counts``)."""

@@ -36,6 +36,8 @@ def extrapolate(centres, local, band, n_seeds) -> dict:
         D_eff over each octave.
     band : ndarray, (octave, resample)
         The bootstrap of D_eff over ``n_seeds`` clusters.
+    n_seeds : int
+        Clusters the bootstrap resamples: the interval of D_inf is over them (``fit.seed_interval``).
 
     Returns
     -------

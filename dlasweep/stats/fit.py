@@ -60,9 +60,25 @@ def seed_interval(estimate, replicates, n: int, axis=-1):
 
     ``estimate`` +- ``t95(n - 1)`` times the replicates' standard deviation
     times sqrt(n / (n - 1)), which undoes the bootstrap's plug-in variance.
-    Percentile intervals of a bootstrap over tens of seeds are too narrow
-    (tests/test_analysis.py measures 79% at 4 seeds, 90% at 10); this one
-    holds 95% from 3 seeds on.
+    Percentile intervals of a bootstrap over a few seeds are too narrow
+    (tests/test_analysis.py; docs/performance.md, "Statistics"); this one
+    holds its coverage from 3 seeds on.
+
+    Parameters
+    ----------
+    estimate : float or ndarray
+        The estimate from all ``n`` seeds.
+    replicates : ndarray
+        Its bootstrap replicates, along ``axis``.
+    n : int
+        Seeds the estimate is over.
+    axis : int
+        The axis of ``replicates`` that holds the replicates.
+
+    Returns
+    -------
+    tuple
+        The interval's low and high ends.
     """
     half = t95(n - 1) * np.std(replicates, axis=axis, ddof=1) * np.sqrt(n / (n - 1))
     return estimate - half, estimate + half
@@ -275,8 +291,17 @@ def fit_dimension(
     ----------
     scales, counts : array_like
         Output of ``box_counts``.
-    min_scale, max_fraction, min_decades, min_points, flat_tolerance
-        The range and flatness rules above.
+    min_scale : float
+        Smallest admissible box side, in particle sizes.
+    max_fraction : float
+        Largest admissible box side, as a fraction of the set's extent.
+    min_decades : float
+        Narrowest window fitted, in decades of box side.
+    min_points : int
+        Fewest sides in the window fitted.
+    flat_tolerance : float
+        Change of the local slope across a window, beyond twice its standard
+        error, that still counts as flat (module docstring).
 
     Returns
     -------
@@ -377,8 +402,20 @@ def fit_mass_radius(
         ``radius_of_gyration`` gives it.
     n : array_like of int, optional
         The counts of ``rg``, increasing (default ``1, 2, ..., len(rg)``).
-    start_fraction, min_count, per_octave, min_decades, min_points, flat_tolerance
-        The sampling, range and flatness rules above.
+    start_fraction : float
+        End of the transient, as a fraction of the largest count
+        (``mass_radius_counts``).
+    min_count : int
+        Fewest particles the history is read from.
+    per_octave : int
+        Counts sampled per factor two of N.
+    min_decades : float
+        Narrowest window fitted, in decades of N.
+    min_points : int
+        Fewest sampled counts in the window fitted.
+    flat_tolerance : float
+        Change of the local slope across a window, beyond twice its standard
+        error, that still counts as flat (module docstring).
 
     Returns
     -------

@@ -319,7 +319,7 @@ def _config(sweep, config, out, resamples):
     at = {d: i for d, i in zip(sweep.config_dims, config)}
     cell = {name: ds[name][at].values for name in (
         "n_grown", "status", "radius_gyration", "max_radius", "wall_time", "walk_steps", "box_count")}
-    # Files written before the anisotropy was measured have none.
+    # Files written before the anisotropy variable existed have none.
     cell["anisotropy"] = (ds["anisotropy"][at].values if "anisotropy" in ds
                           else np.full_like(cell["max_radius"], np.nan))
     needed = [mass_radius_counts(int(n)) for n in sweep.counts]

@@ -58,7 +58,8 @@ class Parts:
     ``failed`` arrays index them, member ``<name>`` holds variable ``name`` of
     them all, flattened and concatenated, and ``<name>.shape`` the shape of
     each: a few zip members per part, since one per variable and cluster
-    took as long to write and read as 10^3-particle clusters take to grow.
+    would cost as much to write and read as small clusters take to grow
+    (docs/performance.md, "Sweeps").
     A cluster is finished when a part holds it without
     error; a failed one is computed again on resume, and a later part then
     holds it too. Knowing what is done reads only the indexes, once. The
@@ -114,7 +115,7 @@ class Parts:
         for name in next(iter(results.values())):
             each = [np.asarray(r[name]) for r in results.values()]
             # Empty arrays (a failed cluster's points) must not set the dtype of the others; one
-            # array alone is not copied (a 1e8 cluster's positions are 800 MB and more).
+            # array alone is not copied (a 1e8 cluster's positions are 8e8 bytes and more).
             filled = [v.ravel() for v in each if v.size] or [each[0].ravel()]
             members[name] = filled[0] if len(filled) == 1 else np.concatenate(filled)
             members[f"{name}.shape"] = np.array([v.shape for v in each], np.int64).reshape(len(each), -1)

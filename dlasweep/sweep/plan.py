@@ -2,7 +2,7 @@
 
 Pure computation from a spec (``plan``) and the room there is (``room``);
 ``check`` refuses, naming the spec's key, a sweep that cannot fit. The
-figures are estimates from the stored types and the kernels' measured use,
+figures are estimates from the stored types and the kernels' benchmarked use,
 rounded up: a sweep may take less, it should not take much more.
 """
 
@@ -23,18 +23,18 @@ from .task import sweep_scales
 
 KERNEL_BYTES = {("lattice", 2): 23, ("offlattice", 2): 33, ("lattice", 3): 31, ("offlattice", 3): 42}
 """Memory a growing cluster takes per particle, by model and dim: the memory ``dlasweep bench --full``
-added growing 10^7 particles, parents included (results/bench/bench.txt: 216, 314, 287 and 401 MB)."""
+added growing 10^7 particles, parents included (results/bench/bench.txt; docs/performance.md, "Sweeps")."""
 MEASURE_COPIES = 2
 """Copies of a grown cluster's positions its measures hold at once (box counting's bitmaps, the
 prefixes' radii), beside the kernel's own."""
 BASE_BYTES = 400 * 2 ** 20
 """A sweep's process before any cluster: Python, numba, the kernels, dask's embedded cluster (a quick
-sweep's peak resident size: 0.27 GB, one of 2 off-lattice clusters of 10^5: 0.40 GB against 0.44 GB planned)."""
+process's peak resident size, rounded up; docs/performance.md, "Sweeps")."""
 TABLE_COPIES = 2
 """Copies of every cluster's measures held at the end: the parts' table and the dataset built from it."""
 TASK_BYTES = 1000
 """Memory a cluster's bookkeeping takes while the sweep runs: its task, its key, its entry in the parts'
-index, its share of a batch's future (280 bytes measured for the first three, rounded up)."""
+index, its share of a batch's future (rounded up from docs/performance.md, "Sweeps")."""
 DISK_COPIES = 2
 """Copies of the stored clusters on disk at the end: the parts (uncompressed) and the file being written."""
 

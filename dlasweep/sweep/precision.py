@@ -1,7 +1,7 @@
 """Precision on demand (``[run] target_ci``): how many seeds a target sweep grows, batch by batch.
 
 The seeds of the spec are a first batch. After each batch the sweep's
-dataset is assembled and its headline D measured (``stats.summary.headline``);
+dataset is assembled and its headline D computed (``stats.summary.headline``);
 while the 95% CI half-width of the headline D at the largest count is above
 the target for some configuration (NaN counts as above) and fewer than
 ``max_seeds`` seeds are grown, every configuration gets more seeds,
@@ -85,7 +85,7 @@ def more_seeds(spec, n, half_width, failed):
 
     The CI half-width of a mean over n seeds falls as 1/sqrt(n), so a
     configuration at half-width w needs about ``n * (w / target_ci)**2``
-    seeds; 10% more covers the noise of w, so that one more batch usually
+    seeds; a tenth more covers the noise of w, so that one more batch usually
     suffices (bootstrap intervals from few seeds are, if anything, too
     narrow, so the estimate errs towards too few seeds, not too many). A
     configuration without an interval yet (NaN) asks for twice n. The worst

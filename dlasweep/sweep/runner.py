@@ -114,7 +114,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
         precision, dask_client, stream = Precision(spec), None, None
         batch = precision.ask()
         while True:
-            tasks = list(batch.tasks())  # listed once a batch: 15 s for 1e7 clusters (``spec.MAX_TASKS``)
+            tasks = list(batch.tasks())  # listed once a batch, as listing is slow at ``spec.MAX_TASKS``
             todo = [t for t in tasks if not parts.finished(t.key)]
             if out is not None:  # the batch's clusters go into the file as they finish
                 stream = _Stream(batch, tasks, parts, todo)

@@ -24,17 +24,15 @@ from ..growth.cluster import STOP
 
 SWITCH_INTERVAL = 0.0005
 """Seconds a thread may hold the GIL while another waits, in the embedded cluster
-(Python's default: 0.005). Measured on 10,000 lattice clusters of 10^3 on 2
-threads, whole sweep: 0.005 s 15.1-15.4 s; 0.001 s 14.4-14.5; 0.0005 s 14.1-15.1;
-0.0002 s 14.2-14.3."""
+(Python's default: 0.005). A thread back from a kernel then waits less for the GIL; a sweep of many
+small clusters, where those waits add up, runs faster (docs/performance.md, "Sweeps")."""
 
 
 COLLECT_EVERY = 20_000
 """Allocations between the garbage collector's young collections while a sweep runs (Python's default: 700).
 
-Measured on 10^4 clusters of 10^3 (``gc.callbacks``): 790 young, 72 middle and
-6 full collections took 0.47-0.51 s, all holding the GIL; at 20,000, 257, 22
-and 2 took 0.22-0.24 s."""
+A sweep allocates many short-lived objects; each collection holds the GIL, and fewer collections
+leave more of it to the threads that hand results on (docs/performance.md, "Sweeps")."""
 
 
 @contextlib.contextmanager
@@ -43,7 +41,7 @@ def collector_eased():
 
     What the imports, kernels and cluster made (about 200,000 objects)
     outlives the sweep, so it is frozen out of the full collections, which
-    scanned it at about 70 ms each; young collections run every
+    would scan all of it each time; young collections run every
     ``COLLECT_EVERY`` allocations (a threshold of 0, no automatic
     collection, is kept).
     """
@@ -79,7 +77,7 @@ def connected(client, scheduler_file, workers, n_tasks, load):
     # core runs them in parallel, starts in milliseconds instead of a second
     # per spawned process, and loads the compiled kernels once, not per process.
     # Its worker shares this process: no memory limit to watch (memory_limit=0),
-    # and no statistical profiler sampling the threads every 10 ms under the GIL.
+    # and no statistical profiler sampling the threads under the GIL.
     interval = sys.getswitchinterval()
     # A thread back from a kernel waits for the GIL until its holder (the
     # event loop, another thread's Python) lets go or the interval ends.

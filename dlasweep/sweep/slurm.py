@@ -3,7 +3,7 @@
 Each job runs one dask worker with ``Options.cores`` threads: the kernels
 release the GIL, and dask notices when a one-worker job ends (``scancel``,
 preemption, the end of its wall time) and submits a replacement (after its
-lost-worker timeout, 15 s by default). Jobs are added as tasks wait, one at
+lost-worker timeout). Jobs are added as tasks wait, one at
 a time: at most one job waits in the queue, and a waiting job is not
 cancelled to be resubmitted (it would lose its place; see ``jobs_to_hold``).
 Once the work has started, one job is kept. A worker retires before its

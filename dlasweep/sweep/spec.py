@@ -31,7 +31,7 @@ MAX_PARTICLES = 100_000_000
 """Largest particle count a spec may ask for (a guard against typos like 1e12)."""
 MAX_TASKS = 10_000_000
 """Most clusters a sweep may grow (a target sweep: at its max_seeds). Its list of tasks is built before
-the plan (``plan``) weighs memory and disk; 10^4 clusters of 10^3 took 13 s, so this is hours at least."""
+the plan (``plan``) weighs memory and disk, and listing this many takes hours (docs/performance.md, "Sweeps")."""
 MAX_WORKERS = 1024
 """Most threads of the embedded cluster (``[run] workers``, ``--workers``)."""
 
@@ -112,7 +112,7 @@ class Spec:
     store_clusters : int or None
         ``[run] store_clusters``: positions are stored for the first this
         many seeds of each configuration (0: "none"); None ("all", the
-        default) stores every cluster. Curves are measured for all.
+        default) stores every cluster. Curves are computed for all.
     """
 
     name: str

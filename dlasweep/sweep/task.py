@@ -2,8 +2,8 @@
 
 What runs on a dask worker (``runner`` submits ``measure_tasks``): the
 cluster grows once, to the largest count, from its own random stream
-``SeedSequence(root_seed, spawn_key=grid indices)``, and each count is
-measured as a prefix. A task never raises: a failure is an ``error`` result
+``SeedSequence(root_seed, spawn_key=grid indices)``, and each count's
+measures come from its prefix. A task never raises: a failure is an ``error`` result
 carrying its message, so that one bad cluster does not end a sweep.
 """
 
@@ -87,7 +87,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
 
 def _prefix_sums(steps, prefix) -> np.ndarray:
     """The sums of ``steps[:m]`` for each m of ``prefix`` (ascending), in int64: a sum per stretch, not a
-    cumulative sum of every particle (800 MB at 1e8)."""
+    cumulative sum of every particle (8 bytes a particle)."""
     stretches = [steps[a:b].sum(dtype=np.int64) for a, b in zip(np.r_[0, prefix[:-1]], prefix)]
     return np.cumsum(np.array(stretches, np.int64))
 

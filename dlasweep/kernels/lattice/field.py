@@ -52,7 +52,10 @@ FIELD_MASK = (0, 0, 255, 15)
 @inline
 def field_place(dim, cell):
     """The byte that holds the lattice field's ``cell`` (``maps.field_cell``) and the shift down to
-    its value, to be masked with ``FIELD_MASK`` (``FIELD_PACKED``)."""
+    its value, to be masked with ``FIELD_MASK`` (``FIELD_PACKED``).
+
+    ``dim`` is the dimension, 2 or 3: it sets whether the field is packed two cells a byte.
+    """
     if FIELD_PACKED[dim]:
         return cell >> 1, (cell & 1) << 2
     return cell, cell & 0
@@ -60,14 +63,20 @@ def field_place(dim, cell):
 
 @jit
 def field_value(field, dim, cell):
-    """The value the lattice field holds for ``cell``: ``cap`` less its distance."""
+    """The value the lattice field holds for ``cell``: ``cap`` less its distance.
+
+    ``field`` is the field's bytes; ``dim`` is the dimension, 2 or 3.
+    """
     at, shift = field_place(dim, cell)
     return (np.int64(field[at]) >> shift) & FIELD_MASK[dim]
 
 
 @jit
 def field_raise(field, dim, cell, value):
-    """Store ``value`` for the lattice field's ``cell`` where it is larger than the value held."""
+    """Store ``value`` for the lattice field's ``cell`` where it is larger than the value held.
+
+    ``field`` is the field's bytes; ``dim`` is the dimension, 2 or 3.
+    """
     at, shift = field_place(dim, cell)
     old = np.int64(field[at])
     if value > (old >> shift) & FIELD_MASK[dim]:

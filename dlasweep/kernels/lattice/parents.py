@@ -27,7 +27,11 @@ so that its pages along the cluster are the only ones written (``maps.zeroed``).
 @jit
 def _box(points, dim, period):
     """Lowest site and tiles a side of a square (cubic) box one site larger than the sites
-    (a substrate's sides: its period)."""
+    (a substrate's sides: its period).
+
+    ``points`` are the sites, int32 (n, dim); ``dim`` is the dimension, 2 or 3; ``period`` a substrate's
+    period (0 without one).
+    """
     shift = TILE_SHIFT[dim - 2]
     lo = np.zeros(3, np.int64)
     side = 1
@@ -46,7 +50,11 @@ def _box(points, dim, period):
 
 @jit
 def _slot(q0, q1, q2, dim, lo, side):
-    """Where site q lives: (its tile's directory entry, its bit in the tile's word), or (-1, 0) off the box."""
+    """Where site q lives: (its tile's directory entry, its bit in the tile's word), or (-1, 0) off the box.
+
+    q is (``q0``, ``q1``, ``q2``), ``q2`` 0 in 2D; ``dim`` is the dimension, 2 or 3; ``lo`` and ``side``
+    are the box's lowest site and its tiles a side (``_box``).
+    """
     shift = TILE_SHIFT[dim - 2]
     mask = (1 << shift) - 1
     r0, r1, r2 = q0 - lo[0], q1 - lo[1], q2 - lo[2]
@@ -59,7 +67,11 @@ def _slot(q0, q1, q2, dim, lo, side):
 
 @jit
 def _site(points, i, dim, period, q):
-    """Particle i's site into q, its periodic coordinates in [0, period)."""
+    """Particle i's site into q, its periodic coordinates in [0, period).
+
+    ``points`` are the sites, int32 (n, dim); ``dim`` is the dimension, 2 or 3; ``q`` is an int64 (3,)
+    written in place.
+    """
     for a in range(dim):
         q[a] = points[i, a]
     if period > 0:  # a site on a periodic side has one name
@@ -200,7 +212,10 @@ def _earliest_neighbour(i, q0, q1, q2, moves, dim, period, lo, side, directory, 
     ``period`` wraps a substrate's sides; ``lo`` and ``side`` are the box (``_box``);
     ``directory``, ``words``, ``offsets`` and ``index`` the site index that ``lattice_parents``
     builds: each tile's number, its occupied sites' bits, its start in ``index``, and the
-    particles' numbers in tile order."""
+    particles' numbers in tile order.
+
+    ``dim`` is the dimension, 2 or 3.
+    """
     best = -1
     for m in range(moves.shape[0]):
         n0, n1, n2 = q0 + moves[m, 0], q1 + moves[m, 1], q2 + moves[m, 2]

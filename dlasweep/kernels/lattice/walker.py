@@ -241,10 +241,12 @@ def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1
 
     Parameters
     ----------
-    words, dim, nb0, width, off, q, moves, nm, line, period
+    words, dim, nb0, width, off, q
         As ``touches`` takes them.
     pos : float64 (3,)
         Receives the new site.
+    moves, nm, line, period
+        As ``touches`` takes them.
     s0, s1, s2, s3 : uint64
         The xoshiro256+ state (``walk.xo``).
     """

@@ -279,8 +279,8 @@ def word_at(words, dim, nb, x, y, z):
 def fine2(a0, a1, a2, b0, b1, b2, c0, c1, c2, x, y):
     """Chebyshev distance from site (x, y) of word b1 to the nearest particle, capped at 9.
 
-    ``a0``..``a2``, ``b0``..``b2``, ``c0``..``c2`` are the 3x3 words (8x8 sites each, rows a below)
-    around the walker's, which cover 8 sites on every side, so the result is
+    ``a0``, ``a1``, ``a2``, ``b0``, ``b1``, ``b2``, ``c0``, ``c1``, ``c2`` are the 3x3 words
+    (8x8 sites each, rows a below) around the walker's, which cover 8 sites on every side, so the result is
     exact below the cap. Rows of 24 sites are OR-ed outwards from the
     walker's row; the square of half-width r is hit when the OR of its rows
     has a bit within r columns. Scalars only: a call that passes arrays costs

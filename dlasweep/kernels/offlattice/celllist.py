@@ -26,7 +26,11 @@ INF = np.inf
 
 @borrow
 def _cell_of(i, pts, dim, gi, gf):
-    """Particle i's cell in the cell list: its tile's place in the directory and its place in the tile."""
+    """Particle i's cell in the cell list: its tile's place in the directory and its place in the tile.
+
+    ``pts`` are the positions, float64 (n, dim); ``dim`` is the dimension, 2 or 3; ``gi`` and ``gf`` the
+    grid's integer and float geometry (``geometry.layout``).
+    """
     c0 = min(max(int(np.floor((pts[i, 0] - gf[ORIGIN]) * gf[INV_SIDE])), 0), gi[CELLS] - 1)
     c1 = min(max(int(np.floor((pts[i, 1] - gf[ORIGIN + 1]) * gf[INV_SIDE + 1])), 0), gi[CELLS + 1] - 1)
     c2 = 0
@@ -135,7 +139,10 @@ def _move_rows(pts, order, nxt, first, count, dim):
     Each swap waits on the read before it; that costs little here, as a sort's rows move a
     short way, most of them sorted already (a copy through free rows past ``count``, whose
     reads do not wait, is faster on a random permutation but not in a growth:
-    docs/performance.md)."""
+    docs/performance.md).
+
+    ``dim`` is the dimension, 2 or 3: the columns of ``pts`` moved.
+    """
     for i in range(first, count):
         while nxt[i] != i:
             j = nxt[i]
@@ -238,7 +245,10 @@ def more_heads(heads):
 
 @jit
 def empty_heads(dim, tiles):
-    """Heads for ``tiles`` tiles in use, reserved for the tiles after growing by ``GROW`` (``HEADS_RESERVE``)."""
+    """Heads for ``tiles`` tiles in use, reserved for the tiles after growing by ``GROW`` (``HEADS_RESERVE``).
+
+    ``dim`` is the dimension, 2 or 3: the reserve grows as ``GROW ** dim``.
+    """
     return maps.zeroed(64 * (int(HEADS_RESERVE * GROW ** dim * tiles) + 64), np.int32)
 
 
@@ -269,7 +279,11 @@ def insert_all(pts, count, nxt, dim, gi, gf, dirr, heads):
 
 @inline
 def _span(v, r, nc, periodic, origin, inv):
-    """Index cells covering [v - r, v + r] on one axis (may wrap if periodic)."""
+    """Index cells covering [v - r, v + r] on one axis (may wrap if periodic).
+
+    ``v`` is the coordinate and ``r`` the half-width; ``nc`` the cells on the axis, ``periodic`` whether
+    the axis wraps, ``origin`` its low edge and ``inv`` one over a cell's side.
+    """
     lo = int(np.floor((v - r - origin) * inv))
     hi = int(np.floor((v + r - origin) * inv))
     if periodic:

@@ -107,6 +107,8 @@ def _allocate_maps(dim, gi):
     level ``FS`` is set. With a pyramid they are left out, a quarter of the
     maps and their marks (the memory saved: docs/performance.md). ``start`` is shifted so that level s still begins at
     ``start[s]``.
+
+    ``dim`` is the dimension, 2 or 3; ``gi`` the grid's integer geometry (``geometry.layout``).
     """
     pyramid = maps.pyramid_levels(dim, gi[MAP_WIDTH], gi[FIELD_CAP], gi[PYRAMID_LEVELS]) > 1
     start, blocks, cells = maps.layout(dim, gi[MAP_WIDTH], FS if pyramid else 64)
@@ -116,7 +118,11 @@ def _allocate_maps(dim, gi):
 
 @borrow
 def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
-    """Set cell (i, j, k) and its neighbours in the dilated levels 1 to top - 1."""
+    """Set cell (i, j, k) and its neighbours in the dilated levels 1 to top - 1.
+
+    ``words``, ``start``, ``blocks`` and ``cells`` are the maps (``maps.allocate``); ``dim`` is the
+    dimension, 2 or 3 (``k`` is 0 in 2D).
+    """
     bs = 3 if dim == 2 else 2
     bm = (1 << bs) - 1
     for s in range(1, top):
@@ -133,7 +139,11 @@ def _mark_levels(words, dim, start, blocks, cells, i, j, k, top):
 
 @jit
 def _empty_grid(dim, line, size, need, tiles):
-    """A grid sized for ``need`` that holds no particle, with room for ``tiles`` cell-list tiles."""
+    """A grid sized for ``need`` that holds no particle, with room for ``tiles`` cell-list tiles.
+
+    ``dim``, ``line``, ``size`` and ``need`` are as ``geometry.layout`` takes them: the dimension,
+    whether the seed is a substrate, its period or the box's side, and the extent to cover.
+    """
     gi, gf = layout(dim, line, size, need)
     words, start, blocks, cells = _allocate_maps(dim, gi)
     ntiles = gi[TILES] * gi[TILES + 1] * gi[TILES + 2]
@@ -264,7 +274,11 @@ def regrow_grid(dim, line, size, need, pts, count, nxt, tiles, old_gi, old_field
 @borrow
 def _first_in_coarse_cell(i0, i1, i2, j, pts, nxt, dim, gi):
     """Whether a particle at map cell (i0, i1, i2), its cell's list going on at j, was the first pushed
-    on that list of those in its coarse cell (of side ``2**FS``): none further down the list shares it."""
+    on that list of those in its coarse cell (of side ``2**FS``): none further down the list shares it.
+
+    ``pts`` are the positions, float64 (n, dim), and ``nxt`` the cell lists' links
+    (``celllist.insert``); ``dim`` is the dimension, 2 or 3; ``gi`` the grid's integer geometry.
+    """
     while j >= 0:
         if ((int(np.floor(pts[j, 0])) + gi[MAP_OFFSET]) >> FS == i0 >> FS
                 and (int(np.floor(pts[j, 1])) + gi[MAP_OFFSET + 1]) >> FS == i1 >> FS
@@ -386,7 +400,10 @@ def walk_geometry(gi, cells, dim):
     ``walk_bound`` takes, worked out once per walk:
     (periodic, m0, m1, m2, W, fw, flo, ftop). (The centre pyramid's
     level starts, an array, come from
-    ``level_starts`` once per grid: the walk allocates nothing.)"""
+    ``level_starts`` once per grid: the walk allocates nothing.)
+
+    ``dim`` is the dimension, 2 or 3.
+    """
     ftop = min(len(cells) - 1, gi[TOP_LEVEL]) + 1
     # the centre field at its cap puts every particle about (cap - 1) coarse cells
     # away, so the map levels whose 3**dim blocks fit well inside that are clear
