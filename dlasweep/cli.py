@@ -142,6 +142,18 @@ def _parser() -> argparse.ArgumentParser:
 
     _slurm_parser(commands)
 
+    start = commands.add_parser(
+        "init", allow_abbrev=False, help="write one of the example sweep specs that come with dlasweep",
+        description="Write one of the example sweep specs that come with dlasweep, to run or to edit.",
+        epilog="example:\n  dlasweep init --list\n  dlasweep init quick -o quick.toml && dlasweep sweep quick.toml",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    start.add_argument("name", nargs="?", metavar="NAME", help="the example's name (--list lists them)")
+    start.add_argument("-o", "--output", type=Path, metavar="SPEC",
+                       help="the spec file to write (default: NAME.toml, here)")
+    start.add_argument("--list", action="store_true", help="list the examples, each with what it sweeps")
+    start.add_argument("--force", action="store_true", help="replace SPEC if it exists")
+    start.set_defaults(handler=_init)
+
     summary = commands.add_parser("report", allow_abbrev=False,
                                   help="tables and plots from a sweep's netCDF file")
     summary.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
@@ -263,16 +275,55 @@ def _grow(args) -> int:
 
 
 def _sweep_target(args) -> tuple:
-    """The spec and the output file of ``sweep`` (and ``slurm``), checked."""
+    """The spec and the output file of ``sweep`` (and ``slurm``), checked, and whether that file is already
+    the complete result of this spec (``--resume`` after the run ended: nothing to do)."""
     spec = load_spec(args.spec)
     out = args.output or Path(args.spec.stem + ".nc")
     if out.suffix != ".nc":
         raise UsageError(f"-o {out}: expected a file ending in .nc")
     _check_writable(out)
+    parts = Path(f"{out}.parts").exists()
+    why = ""
+    if args.resume and not args.force and not parts and out.is_file():
+        # A job script that reruns its sweep after a preemption ends green once the sweep is done.
+        differs = _differs(spec, out)
+        if differs is None:
+            return spec, out, True
+        why = f" and is not this spec's complete result ({differs}); nothing left to resume"
+    elif args.resume:
+        why = "; nothing left to resume"
     # Resuming finishes the file an earlier run was writing: it may replace the file it left.
-    _check_new(out, args.force or (args.resume and Path(f"{out}.parts").exists()),
-               "; nothing left to resume" if args.resume else "")
-    return spec, out
+    _check_new(out, args.force or (args.resume and parts), why)
+    return spec, out, False
+
+
+def _differs(spec, out: Path) -> str | None:
+    """How the sweep file ``out`` differs from the complete result of ``spec`` (format, spec, failed tasks),
+    or None when it is that result."""
+    from ._version import FORMAT
+    from .data import netcdf
+    from .data.schema import StoreError
+    from .sweep.spec import differences, parse_spec
+
+    try:
+        with netcdf.open_sweep(out) as ds:
+            attrs, written = dict(ds.attrs), netcdf.file_format(ds)
+    except StoreError as err:
+        return _one_line(err).removeprefix(f"{out}: ")
+    if written != FORMAT:
+        return f"file format {written}, this dlasweep writes {FORMAT}"
+    if "spec" not in attrs:
+        return "it holds one cluster, not a sweep"
+    if attrs.get("failed_tasks"):
+        return "tasks failed in it"
+    try:
+        old = parse_spec(str(attrs["spec"]), default_name=spec.name)
+    except SpecError as err:
+        return f"its spec: {_one_line(err)}"
+    changes = differences(old.identity(), spec.identity())
+    changes += [f"{key}: {getattr(old, key)!r} -> {getattr(spec, key)!r}" for key in ("name", "target_ci", "max_seeds")
+                if getattr(old, key) != getattr(spec, key)]
+    return "; ".join(changes) or None
 
 
 def _sweep(args) -> int:
@@ -280,7 +331,10 @@ def _sweep(args) -> int:
     from .sweep.runner import run_sweep
     from .sweep.session import embedded_threads, scheduler_address
 
-    spec, out = _sweep_target(args)
+    spec, out, complete = _sweep_target(args)
+    if complete:
+        print(f"{out}: complete, nothing to do")
+        return 0
     if args.workers is not None:
         if not 1 <= args.workers <= MAX_WORKERS:
             raise UsageError(f"--workers: {args.workers} is not in [1, {MAX_WORKERS}]")
@@ -369,7 +423,10 @@ def _slurm_parser(commands):
 def _slurm(args) -> int:
     """Check everything, then run ``sweep`` on a scheduler whose workers are SLURM jobs."""
     options = slurm.Options(**{field.name: getattr(args, field.name) for field in dataclasses.fields(slurm.Options)})
-    _, out = _sweep_target(args)
+    _, out, complete = _sweep_target(args)
+    if complete:
+        print(f"{out}: complete, nothing to do")
+        return 0
     try:
         script = slurm.prepare(options, ask_slurm=not args.dry_run)
     except slurm.OptionError as err:
@@ -391,6 +448,30 @@ def _slurm(args) -> int:
         _say(f"dlasweep slurm {time.strftime('%H:%M:%S')} {line}")
 
     return slurm.launch(options, sweep, echo, task_lines=not sys.stderr.isatty())
+
+
+def _init(args) -> int:
+    """Write a shipped example spec (``sweep.examples``), or list them."""
+    from .sweep import examples
+
+    if args.list:
+        if args.name is not None or args.output is not None:
+            raise UsageError("--list: takes no NAME or -o")
+        width = max(map(len, examples.names()))
+        print("\n".join(f"{name:<{width}}  {examples.description(name)}" for name in examples.names()))
+        return 0
+    if args.name is None:
+        raise UsageError(f"NAME: missing; choose one of {', '.join(examples.names())} (--list describes them)")
+    try:
+        text = examples.text(args.name)
+    except KeyError as err:
+        raise UsageError(f"NAME: {err.args[0]}") from None
+    out = args.output or Path(f"{args.name}.toml")
+    _check_writable(out)
+    _check_new(out, args.force)
+    out.write_text(text, encoding="utf-8")
+    print(f"{out}: the {args.name} example; run it with `dlasweep sweep {out}`")
+    return 0
 
 
 def _report(args) -> int:
