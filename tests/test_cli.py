@@ -662,3 +662,59 @@ def test_an_interrupt_before_any_cluster_finished_says_nothing_is_kept(tmp_path)
     assert child.returncode == 130, err
     assert err.strip().splitlines() == ["dlasweep sweep: interrupted; no cluster had finished, nothing is kept"]
     assert files_under(tmp_path) == {Path("big.toml")}
+
+
+def test_resume_of_a_complete_sweep_has_nothing_to_do(tiny_sweep, tmp_path, run_cli):
+    # A job script that reruns its sweep after a preemption ends green; before, this was refused (exit 2).
+    from dlasweep._version import FORMAT
+
+    _, _, _, folder = tiny_sweep
+    out = tmp_path / "tiny.nc"
+    shutil.copy(folder / "tiny.nc", out)
+    with store.open_sweep(out) as ds:
+        assert ds.attrs["dlasweep_format"] == FORMAT
+    spec = tmp_path / "spec.toml"
+    spec.write_text(TINY_SPEC)
+    before = files_under(tmp_path), out.stat().st_mtime_ns
+    assert run_cli("sweep", spec, "-o", out, "--resume") == (0, f"{out}: complete, nothing to do\n", "")
+    assert (files_under(tmp_path), out.stat().st_mtime_ns) == before
+    spec.write_text(TINY_SPEC.replace("seeds = 3", "seeds = 4"))
+    status, stdout, err = run_cli("sweep", spec, "-o", out, "--resume")
+    assert status == 2 and stdout == "" and len(err.strip().splitlines()) == 1
+    assert f"-o {out}: exists and is not this spec's complete result (grid.seeds: [0, 1, 2] -> [0, 1, 2, 3]); " \
+           "nothing left to resume; pass --force to replace it" in err
+    assert (files_under(tmp_path), out.stat().st_mtime_ns) == before
+
+
+def test_init_writes_a_shipped_spec_and_lists_them(tmp_path, run_cli, monkeypatch):
+    from dlasweep.sweep import examples
+    from dlasweep.sweep.spec import load_spec
+
+    monkeypatch.chdir(tmp_path)
+    status, listed, err = run_cli("init", "--list")
+    assert status == 0 and err == ""
+    assert [line.split()[0] for line in listed.splitlines()] == examples.names()
+    assert {"quick", "tradeoff", "dimension", "dimension3d", "branching"} <= set(examples.names())
+    for name in examples.names():
+        assert 20 <= len(examples.description(name)) <= 100, name  # the first line, a comment: one short line
+        assert f"{name}  " in listed and examples.description(name) in listed
+        assert run_cli("init", name, "-o", f"my-{name}.toml")[0] == 0
+        assert (tmp_path / f"my-{name}.toml").read_text() == examples.text(name)
+        load_spec(tmp_path / f"my-{name}.toml")  # each one runs as written
+    assert run_cli("init", "quick")[0] == 0 and (tmp_path / "quick.toml").exists()  # default: NAME.toml
+    before = files_under(tmp_path)
+    for argv, message in ((["nosuch"], "dlasweep init: NAME: 'nosuch' is not a shipped spec; choose one of "
+                                       + ", ".join(examples.names())),
+                          (["quick", "-o", "quick.toml"], "-o quick.toml: exists; pass --force to replace it"),
+                          ([], "NAME: missing; choose one of"), (["--list", "quick"], "--list: takes no NAME")):
+        status, stdout, err = run_cli("init", *argv)
+        assert status == 2 and stdout == "" and len(err.strip().splitlines()) == 1 and message in err, err
+    assert files_under(tmp_path) == before
+    (tmp_path / "quick.toml").write_text("edited")
+    assert run_cli("init", "quick", "--force")[0] == 0 and (tmp_path / "quick.toml").read_text() == examples.text("quick")
+
+
+def test_no_spec_stays_in_workflows():
+    # One copy of each example: the package's. A spec added to workflows/ ships once moved (docs/spec.md).
+    stray = sorted(p.name for p in (ROOT / "workflows").glob("*.toml"))
+    assert stray == [], f"{stray}: git mv them into dlasweep/sweep/specs/ to ship them"
