@@ -1,9 +1,11 @@
 """The command line: bad input exits 2 with one line and writes nothing; help from the parameter table;
 sweeps end to end; what ``info`` tells of a file."""
 
+import argparse
 import contextlib
 import importlib
 import io
+import re
 import shutil
 import signal
 import subprocess
@@ -718,3 +720,34 @@ def test_no_spec_stays_in_workflows():
     # One copy of each example: the package's. A spec added to workflows/ ships once moved (docs/spec.md).
     stray = sorted(p.name for p in (ROOT / "workflows").glob("*.toml"))
     assert stray == [], f"{stray}: git mv them into dlasweep/sweep/specs/ to ship them"
+
+
+def _helps():
+    """The help of ``dlasweep`` and of each of its commands, by command."""
+    parser = cli._parser()
+    commands = next(a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {"": parser.format_help(), **{name: sub.format_help() for name, sub in commands.items()}}
+
+
+def test_every_command_has_a_one_line_description_and_examples():
+    helps = _helps()
+    assert {"grow", "export", "sweep", "slurm", "init", "report", "info", "bench"} <= set(helps)
+    for name, text in helps.items():
+        description = text.split("\n\n")[1]
+        assert description.endswith(".") and len(description.splitlines()) <= 2, (name, description)
+        examples = text.partition("examples:\n")[2].splitlines()
+        assert examples and all(line.startswith("  dlasweep ") for line in examples[:1]), (name, text)
+        # no tracker numbers, no repository paths a pip user does not have, no generic V for a value
+        assert not re.search(r"\bissues? ?\d|README|workflows/|DESIGN| V\b", text), (name, text)
+    assert "docs/spec.md" in helps["sweep"] and "dlasweep init" in helps["sweep"]
+    assert "[--jumps | --no-jumps]" in helps["grow"] and "--kill-factor FACTOR" in helps["grow"]
+
+
+def test_a_boolean_parameter_is_a_switch(tmp_path, run_cli):
+    for switch, value in (("--no-jumps", False), ("--jumps", True)):
+        out = tmp_path / f"{switch}.nc"
+        assert run_cli("grow", "-n", "30", switch, "-o", out)[0] == 0
+        with store.open_sweep(out) as ds:
+            assert bool(ds["jumps"]) is value
+    status, _, err = run_cli("grow", "-n", "30", "--jumps", "false", "-o", tmp_path / "x.nc")
+    assert status == 2 and "unrecognized arguments: false" in err
