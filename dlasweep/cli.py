@@ -111,7 +111,8 @@ def _parser() -> argparse.ArgumentParser:
                    ["dlasweep grow -n 1e5 -o cluster.png",
                     "dlasweep grow -n 2e4 --dim 3 --model offlattice --stickiness 0.3 -o cluster.nc",
                     "dlasweep grow -n 1e4 --no-jumps --seed 7 -o cluster.csv"],
-                   "Every model parameter is an option; docs/model.md explains them.")
+                   "Each option from --model to --max-steps sets a parameter of the model (docs/model.md "
+                   "explains them).")
     one.add_argument("-n", type=_params.integer, required=True, help="number of particles, e.g. 100000 or 1e5")
     one.add_argument("--seed", type=_params.integer, default=0, help="random seed (default 0)")
     for name, param in _params.PARAMETERS.items():
@@ -423,11 +424,13 @@ def _slurm_parser(commands):
                                "exists; when OUT is already this spec's complete result, nothing to do")
     launcher.add_argument("--force", action="store_true", help="replace OUT if it exists")
     job = launcher.add_argument_group("each worker job")
-    job.add_argument("--partition", "--queue", dest="partition", metavar="NAME", help="SLURM partition (default: the default one)")
+    job.add_argument("--partition", "--queue", dest="partition", metavar="NAME",
+                     help="SLURM partition (default: the default one)")
     job.add_argument("--account", metavar="NAME", help="SLURM account")
     job.add_argument("--cores", type=int, default=default.cores, metavar="N",
                      help=f"CPUs of a job: one dask worker with this many threads (default {default.cores})")
-    job.add_argument("--memory", default=default.memory, metavar="SIZE", help=f"memory of a job (default {default.memory})")
+    job.add_argument("--memory", default=default.memory, metavar="SIZE",
+                     help=f"memory of a job (default {default.memory})")
     job.add_argument("--walltime", default=default.walltime, metavar="TIME",
                      help=f"wall time of a job, in SLURM's format (default {default.walltime}); workers retire "
                           f"before it ends")
@@ -447,7 +450,8 @@ def _slurm_parser(commands):
                      help=f"seconds a worker waits for a lost scheduler before it exits "
                           f"(default {default.death_timeout:g})")
     net = launcher.add_argument_group("network")
-    net.add_argument("--interface", metavar="NAME", help="network interface of the scheduler and the workers, e.g. ib0 or lo")
+    net.add_argument("--interface", metavar="NAME",
+                     help="network interface of the scheduler and the workers, e.g. ib0 or lo")
     net.add_argument("--scheduler-host", metavar="ADDRESS",
                      help="address the scheduler listens on (default: --interface's, else the host name's)")
     launcher.add_argument("--log-every", type=int, default=default.log_every, metavar="N",

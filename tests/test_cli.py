@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
 from dlasweep import cli
+from dlasweep._version import FORMAT
 from dlasweep.data import netcdf as store
 from dlasweep.data import ragged, schema
 from dlasweep.params import PARAMETERS
@@ -173,7 +174,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
 
 
 def check_design(ds, spec_text):
-    """The dataset as the README names it, for the tiny spec."""
+    """The dataset as docs/dataset.md names it, for the tiny spec."""
     assert ds["box_count"].dims == ("stickiness", "size", "n_particles", "seed", "scale")
     for name in ("n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "wall_time", "walk_steps"):
         assert ds[name].dims == ("stickiness", "size", "n_particles", "seed"), name
@@ -334,7 +335,7 @@ def test_resume_with_changed_spec_exits_2(run_cli, write_spec, tmp_path, dask_cl
     out = tmp_path / "tiny.nc"
     parts = tmp_path / "tiny.nc.parts"
     parts.mkdir()
-    (parts / "manifest.json").write_text('{"digest": "old", "identity": {"grid.seeds": [0]}}')
+    (parts / "manifest.json").write_text(f'{{"format": {FORMAT}, "digest": "old", "identity": {{"grid.seeds": [0]}}}}')
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--resume",
                              "--scheduler", dask_cluster.scheduler_address)
     assert status == 2 and "grid.seeds: [0] -> [0, 1, 2]" in err
@@ -668,7 +669,7 @@ def test_an_interrupt_before_any_cluster_finished_says_nothing_is_kept(tmp_path)
 
 def test_resume_of_a_complete_sweep_has_nothing_to_do(tiny_sweep, tmp_path, run_cli):
     # A job script that reruns its sweep after a preemption ends green; before, this was refused (exit 2).
-    from dlasweep._version import FORMAT
+
 
     _, _, _, folder = tiny_sweep
     out = tmp_path / "tiny.nc"
@@ -713,7 +714,8 @@ def test_init_writes_a_shipped_spec_and_lists_them(tmp_path, run_cli, monkeypatc
         assert status == 2 and stdout == "" and len(err.strip().splitlines()) == 1 and message in err, err
     assert files_under(tmp_path) == before
     (tmp_path / "quick.toml").write_text("edited")
-    assert run_cli("init", "quick", "--force")[0] == 0 and (tmp_path / "quick.toml").read_text() == examples.text("quick")
+    assert run_cli("init", "quick", "--force")[0] == 0
+    assert (tmp_path / "quick.toml").read_text() == examples.text("quick")
 
 
 def test_no_spec_stays_in_workflows():

@@ -1,4 +1,4 @@
-"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (README, "The dataset"), CF
+"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (docs/dataset.md), CF
 compliance, atomic writes, bad files."""
 
 import os

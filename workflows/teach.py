@@ -41,7 +41,7 @@ from dlasweep.reporting.pictures import draw_cluster
 MODELS = {"lattice": "square lattice", "offlattice": "disks, off the lattice"}
 
 D_2D = 1.708
-"""D of 2D off-lattice DLA from 114 clusters up to 300 000 particles (the dimension example: dlasweep init dimension)."""
+"""D of 2D off-lattice DLA from 114 clusters up to 300 000 particles (`dlasweep init dimension`)."""
 
 
 def checked(n, seed, output) -> Path:
