@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml
 # Its outputs are ignored by git. --resume continues a run that was interrupted, --force replaces the last one's file.
 sweep: $(STAMP)
 	mkdir -p results
-	.venv/bin/dlasweep sweep workflows/quick.toml -o results/quick.nc --resume --force
+	.venv/bin/dlasweep sweep dlasweep/sweep/specs/quick.toml -o results/quick.nc --resume --force
 	.venv/bin/dlasweep report results/quick.nc -o results/quick
 
 # The committed example of the quick report: refresh it when the report changes.

@@ -16,6 +16,7 @@ import contextlib
 import dataclasses
 import os
 import sys
+import textwrap
 import time
 import traceback
 import warnings
@@ -97,75 +98,116 @@ def _refusal(err) -> bool:
 
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="dlasweep", allow_abbrev=False,
-                     description="Parameter sweeps of diffusion-limited aggregation.")
+                     description="Parameter sweeps of diffusion-limited aggregation.",
+                     epilog="examples:\n  dlasweep grow -n 1e5 -o cluster.png\n"
+                            "  dlasweep init quick && dlasweep sweep quick.toml && dlasweep report quick.nc\n\n"
+                            "`dlasweep COMMAND --help` describes a command.",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"dlasweep {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    one = commands.add_parser("grow", allow_abbrev=False,
-                              help="grow one cluster and save it (.nc), draw it (.png, .svg) or export it "
-                                   "(.csv, .ply, .obj)")
+    one = _command(commands, "grow", "grow one cluster and save it (.nc), draw it (.png, .svg) or export it "
+                   "(.csv, .ply, .obj)",
+                   ["dlasweep grow -n 1e5 -o cluster.png",
+                    "dlasweep grow -n 2e4 --dim 3 --model offlattice --stickiness 0.3 -o cluster.nc",
+                    "dlasweep grow -n 1e4 --no-jumps --seed 7 -o cluster.csv"],
+                   "Each option from --model to --max-steps sets a parameter of the model (docs/model.md "
+                   "explains them).")
     one.add_argument("-n", type=_params.integer, required=True, help="number of particles, e.g. 100000 or 1e5")
     one.add_argument("--seed", type=_params.integer, default=0, help="random seed (default 0)")
     for name, param in _params.PARAMETERS.items():
         one.add_argument(f"--{name.replace('_', '-')}", dest=name, **_option(name, param))
         if "_" in name:  # the spec's spelling works too, without a second line of help
             one.add_argument(f"--{name}", dest=name, help=argparse.SUPPRESS)
-    one.add_argument("-o", "--output", required=True, type=Path,
+    one.add_argument("-o", "--output", required=True, type=Path, metavar="FILE",
                      help="output file: " + ", ".join(_export.SUFFIXES))
     one.add_argument("--force", action="store_true", help="replace the output file if it exists")
     _output_options(one)
     one.set_defaults(handler=_grow)
 
-    out = commands.add_parser("export", allow_abbrev=False,
-                              help="one stored cluster of a dataset as a table, a mesh or a picture")
-    out.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep` or `dlasweep grow`")
+    out = _command(commands, "export", "write one stored cluster of a dataset as a table, a mesh or a picture",
+                   ["dlasweep export quick.nc --cluster 3 -o cluster.ply --mesh tubes",
+                    "dlasweep export quick.nc --cluster 0 -o tree.svg --style tree"])
+    out.add_argument("dataset", type=Path, metavar="DATASET",
+                     help="netCDF file written by `dlasweep sweep` or `dlasweep grow`")
     out.add_argument("--cluster", type=_params.integer, required=True, metavar="K",
                      help="the cluster's position in the file (0 first; `dlasweep info` counts them)")
-    out.add_argument("-o", "--output", required=True, type=Path,
+    out.add_argument("-o", "--output", required=True, type=Path, metavar="FILE",
                      help="output file: " + ", ".join(_export.SUFFIXES))
     out.add_argument("--force", action="store_true", help="replace the output file if it exists")
     _output_options(out)
     out.set_defaults(handler=_export_cluster)
 
-    many = commands.add_parser("sweep", allow_abbrev=False, help="run a sweep spec (TOML) into a netCDF file")
-    many.add_argument("spec", type=Path, help="sweep spec, e.g. workflows/quick.toml")
-    many.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
+    many = _command(commands, "sweep", "run a sweep spec (TOML) into a netCDF file",
+                    ["dlasweep init quick && dlasweep sweep quick.toml -o quick.nc",
+                     "dlasweep sweep quick.toml -o quick.nc --resume   # after an interruption",
+                     "dlasweep sweep quick.toml --scheduler-file sched.json"],
+                    "The spec's keys are documented in docs/spec.md (the sweep spec); `dlasweep init --list` "
+                    "lists example specs to start from.")
+    many.add_argument("spec", type=Path, metavar="SPEC", help="sweep spec, e.g. from `dlasweep init quick`")
+    many.add_argument("-o", "--output", type=Path, metavar="OUT",
+                      help="netCDF file (default: SPEC's name with .nc, here)")
     where = many.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDRESS", help="address of a running dask scheduler")
     where.add_argument("--scheduler-file", type=Path, metavar="FILE", help="dask scheduler file")
     many.add_argument("--workers", type=_params.integer, metavar="K",
                       help="threads of the embedded dask cluster (tasks at once)")
     many.add_argument("--resume", action="store_true",
-                      help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists")
+                      help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists; "
+                           "when OUT is already this spec's complete result, nothing to do")
     many.add_argument("--force", action="store_true", help="replace OUT if it exists")
     many.set_defaults(handler=_sweep)
 
     _slurm_parser(commands)
 
-    summary = commands.add_parser("report", allow_abbrev=False,
-                                  help="tables and plots from a sweep's netCDF file")
-    summary.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep`")
-    summary.add_argument("-o", "--output", type=Path,
+    start = _command(commands, "init", "write one of the example sweep specs that come with dlasweep",
+                     ["dlasweep init --list", "dlasweep init quick -o quick.toml && dlasweep sweep quick.toml"],
+                     "Run it as it is, or edit it first: docs/spec.md documents its keys.")
+    start.add_argument("name", nargs="?", metavar="NAME", help="the example's name (--list lists them)")
+    start.add_argument("-o", "--output", type=Path, metavar="SPEC",
+                       help="the spec file to write (default: NAME.toml, here)")
+    start.add_argument("--list", action="store_true", help="list the examples, each with what it sweeps")
+    start.add_argument("--force", action="store_true", help="replace SPEC if it exists")
+    start.set_defaults(handler=_init)
+
+    summary = _command(commands, "report", "write the tables and plots of a sweep's netCDF file",
+                       ["dlasweep report quick.nc -o quick"])
+    summary.add_argument("dataset", type=Path, metavar="DATASET", help="netCDF file written by `dlasweep sweep`")
+    summary.add_argument("-o", "--output", type=Path, metavar="DIR",
                          help="output folder (default: DATASET without .nc); an earlier report there is replaced")
     summary.set_defaults(handler=_report)
 
-    about = commands.add_parser("info", allow_abbrev=False,
-                                help="what a dataset holds: spec, axes, counts, statuses, failed tasks, headline D")
-    about.add_argument("dataset", type=Path, help="netCDF file written by `dlasweep sweep` or `dlasweep grow`")
+    about = _command(commands, "info", "say what a dataset holds: spec, axes, counts, statuses, failed tasks, "
+                     "headline D", ["dlasweep info quick.nc", "dlasweep info cluster.nc"])
+    about.add_argument("dataset", type=Path, metavar="DATASET",
+                       help="netCDF file written by `dlasweep sweep`, `dlasweep grow` or `dlasweep bench`")
     about.set_defaults(handler=_info)
 
-    timing = commands.add_parser("bench", allow_abbrev=False,
-                                 help="kernel speed, memory and cost scaling into results/bench")
-    timing.add_argument("-o", "--output", type=Path, default=Path("results/bench"), help="output folder")
+    timing = _command(commands, "bench", "measure the kernels' speed, memory and cost scaling on this machine",
+                      ["dlasweep bench --quick -o bench", "dlasweep bench --model lattice-2d -o bench"],
+                      "docs/benchmark.md says what each column means.")
+    timing.add_argument("-o", "--output", type=Path, default=Path("results/bench"), metavar="DIR",
+                        help="output folder (default results/bench)")
     size = timing.add_mutually_exclusive_group()
     size.add_argument("--full", action="store_true",
-                      help="add N = 1e7 for every model and print the table of issue 25's targets")
+                      help="add N = 1e7 for every model and print the table of targets: seconds, memory "
+                           "per particle, cost exponent")
     size.add_argument("--huge", action="store_true", help="--full, and N = 1e8 for the 2D models (hours)")
     size.add_argument("--quick", action="store_true", help="only the smallest N (a smoke test)")
     timing.add_argument("--model", action="append", choices=list(BENCH_MODELS), metavar="MODEL",
                         help=f"only this model (repeat for more): {', '.join(BENCH_MODELS)}; default every one")
     timing.set_defaults(handler=_bench)
     return parser
+
+
+def _command(commands, name, summary, examples, description=None):
+    """A subcommand's parser: ``summary`` (one line) in the list of commands and atop its help, ``description``
+    below it, and its ``examples`` (command lines) at the end of its help."""
+    paragraphs = [summary[0].upper() + summary[1:] + ".", *([description] if description else [])]
+    text = "\n\n".join(textwrap.fill(paragraph, 79) for paragraph in paragraphs)
+    return commands.add_parser(name, allow_abbrev=False, help=summary, description=text,
+                               epilog="examples:\n" + "\n".join(f"  {line}" for line in examples),
+                               formatter_class=argparse.RawDescriptionHelpFormatter)
 
 
 def _output_options(command):
@@ -227,11 +269,16 @@ def _export_cluster(args) -> int:
 
 
 def _option(name, param) -> dict:
-    """``metavar`` and ``help`` of a model parameter's option, from its row of ``params.PARAMETERS``."""
+    """``metavar`` and ``help`` of a model parameter's option, from its row of ``params.PARAMETERS``: a choice
+    lists its values, a boolean is a switch and its ``--no-`` form, any other is named by its name's last word
+    (``--kill-factor FACTOR``)."""
     default = f"Default: {_params.shown_default(name)}."
+    if param.kind is bool:
+        return {"action": argparse.BooleanOptionalAction, "help": f"{param.meaning}. {default}"}
     if isinstance(param.values, tuple):
         return {"metavar": "{" + ",".join(map(_params.text, param.values)) + "}", "help": f"{param.meaning}. {default}"}
-    return {"metavar": "V", "help": f"{param.meaning}. Allowed: {_params.allowed(name)}. {default}"}
+    return {"metavar": name.rpartition("_")[2].upper(),
+            "help": f"{param.meaning}. Allowed: {_params.allowed(name)}. {default}"}
 
 
 def _grow(args) -> int:
@@ -246,8 +293,8 @@ def _grow(args) -> int:
     if not 0 <= args.seed <= _params.MAX_SEED:
         raise UsageError(f"--seed: {args.seed} is not in [0, {_params.MAX_SEED}]")
     try:
-        given = {k: _params.coerce(k, getattr(args, k))
-                 for k in _params.DEFAULTS if getattr(args, k) is not None}
+        given = {k: v if isinstance(v, bool) else _params.coerce(k, v)  # a switch's value is bool already
+                 for k in _params.DEFAULTS if (v := getattr(args, k)) is not None}
         resolved = _params.resolve(**given)
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
@@ -263,16 +310,55 @@ def _grow(args) -> int:
 
 
 def _sweep_target(args) -> tuple:
-    """The spec and the output file of ``sweep`` (and ``slurm``), checked."""
+    """The spec and the output file of ``sweep`` (and ``slurm``), checked, and whether that file is already
+    the complete result of this spec (``--resume`` after the run ended: nothing to do)."""
     spec = load_spec(args.spec)
     out = args.output or Path(args.spec.stem + ".nc")
     if out.suffix != ".nc":
         raise UsageError(f"-o {out}: expected a file ending in .nc")
     _check_writable(out)
+    parts = Path(f"{out}.parts").exists()
+    why = ""
+    if args.resume and not args.force and not parts and out.is_file():
+        # A job script that reruns its sweep after a preemption ends green once the sweep is done.
+        differs = _differs(spec, out)
+        if differs is None:
+            return spec, out, True
+        why = f" and is not this spec's complete result ({differs}); nothing left to resume"
+    elif args.resume:
+        why = "; nothing left to resume"
     # Resuming finishes the file an earlier run was writing: it may replace the file it left.
-    _check_new(out, args.force or (args.resume and Path(f"{out}.parts").exists()),
-               "; nothing left to resume" if args.resume else "")
-    return spec, out
+    _check_new(out, args.force or (args.resume and parts), why)
+    return spec, out, False
+
+
+def _differs(spec, out: Path) -> str | None:
+    """How the sweep file ``out`` differs from the complete result of ``spec`` (format, spec, failed tasks),
+    or None when it is that result."""
+    from ._version import FORMAT
+    from .data import netcdf
+    from .data.schema import StoreError
+    from .sweep.spec import differences, parse_spec
+
+    try:
+        with netcdf.open_sweep(out) as ds:
+            attrs, written = dict(ds.attrs), netcdf.file_format(ds)
+    except StoreError as err:
+        return _one_line(err).removeprefix(f"{out}: ")
+    if written != FORMAT:
+        return f"file format {written}, this dlasweep writes {FORMAT}"
+    if "spec" not in attrs:
+        return "it holds one cluster, not a sweep"
+    if attrs.get("failed_tasks"):
+        return "tasks failed in it"
+    try:
+        old = parse_spec(str(attrs["spec"]), default_name=spec.name)
+    except SpecError as err:
+        return f"its spec: {_one_line(err)}"
+    changes = differences(old.identity(), spec.identity())
+    changes += [f"{key}: {getattr(old, key)!r} -> {getattr(spec, key)!r}" for key in ("name", "target_ci", "max_seeds")
+                if getattr(old, key) != getattr(spec, key)]
+    return "; ".join(changes) or None
 
 
 def _sweep(args) -> int:
@@ -280,7 +366,10 @@ def _sweep(args) -> int:
     from .sweep.runner import run_sweep
     from .sweep.session import embedded_threads, scheduler_address
 
-    spec, out = _sweep_target(args)
+    spec, out, complete = _sweep_target(args)
+    if complete:
+        print(f"{out}: complete, nothing to do")
+        return 0
     if args.workers is not None:
         if not 1 <= args.workers <= MAX_WORKERS:
             raise UsageError(f"--workers: {args.workers} is not in [1, {MAX_WORKERS}]")
@@ -318,44 +407,51 @@ def _sweep(args) -> int:
 def _slurm_parser(commands):
     """``dlasweep slurm``: the options of ``slurm.Options``, their defaults from it."""
     default = slurm.Options()
-    launcher = commands.add_parser(
-        "slurm", allow_abbrev=False, help="run a sweep spec on SLURM, its dask workers in SLURM jobs",
-        description="Run a sweep spec on SLURM (needs pip install 'dlasweep[slurm]'). The dask scheduler "
+    launcher = _command(
+        commands, "slurm", "run a sweep spec on SLURM, its dask workers in SLURM jobs",
+        ["dlasweep slurm quick.toml -o quick.nc --partition short --cores 8 --memory 16GB --walltime 02:00:00",
+         "dlasweep slurm quick.toml --dry-run   # print the job script"],
+        description="Needs pip install 'dlasweep[slurm]'; docs/clusters.md tells more. The dask scheduler "
                     "runs in this process (a login node, or a small job of its own); each SLURM job is one "
                     "dask worker with --cores threads. Jobs are added one at a time as tasks wait, a job that "
                     "ends is replaced, workers retire before --walltime runs out, and on any exit (Ctrl-C: "
                     "130, SIGTERM: 143) every job submitted is cancelled, finished tasks kept for --resume.")
-    launcher.add_argument("spec", type=Path, help="sweep spec (TOML)")
-    launcher.add_argument("-o", "--output", type=Path, help="netCDF file (default: SPEC's name with .nc, here)")
+    launcher.add_argument("spec", type=Path, metavar="SPEC", help="sweep spec (TOML; docs/spec.md, `dlasweep init`)")
+    launcher.add_argument("-o", "--output", type=Path, metavar="OUT",
+                          help="netCDF file (default: SPEC's name with .nc, here)")
     launcher.add_argument("--resume", action="store_true",
-                          help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it exists")
+                          help="continue an interrupted run of this spec (its OUT.parts), replacing OUT if it "
+                               "exists; when OUT is already this spec's complete result, nothing to do")
     launcher.add_argument("--force", action="store_true", help="replace OUT if it exists")
     job = launcher.add_argument_group("each worker job")
-    job.add_argument("--partition", "--queue", dest="partition", help="SLURM partition (default: the default one)")
-    job.add_argument("--account", help="SLURM account")
-    job.add_argument("--cores", type=int, default=default.cores,
+    job.add_argument("--partition", "--queue", dest="partition", metavar="NAME",
+                     help="SLURM partition (default: the default one)")
+    job.add_argument("--account", metavar="NAME", help="SLURM account")
+    job.add_argument("--cores", type=int, default=default.cores, metavar="N",
                      help=f"CPUs of a job: one dask worker with this many threads (default {default.cores})")
-    job.add_argument("--memory", default=default.memory, help=f"memory of a job (default {default.memory})")
-    job.add_argument("--walltime", default=default.walltime,
+    job.add_argument("--memory", default=default.memory, metavar="SIZE",
+                     help=f"memory of a job (default {default.memory})")
+    job.add_argument("--walltime", default=default.walltime, metavar="TIME",
                      help=f"wall time of a job, in SLURM's format (default {default.walltime}); workers retire "
                           f"before it ends")
-    job.add_argument("--max-jobs", type=int, default=default.max_jobs,
+    job.add_argument("--max-jobs", type=int, default=default.max_jobs, metavar="N",
                      help=f"most jobs at once (default {default.max_jobs})")
     job.add_argument("--sbatch", action="append", default=[], metavar="OPTION",
                      help="extra #SBATCH line, e.g. --sbatch '--qos=short' (repeatable)")
-    job.add_argument("--python", default=default.python,
+    job.add_argument("--python", default=default.python, metavar="PATH",
                      help="Python that runs the workers (default: this one, by absolute path)")
     job.add_argument("--prologue", action="append", default=[], metavar="LINE",
                      help="shell line run before the worker starts, e.g. 'module load ...' (repeatable)")
-    job.add_argument("--log-dir", type=Path, default=default.log_dir,
+    job.add_argument("--log-dir", type=Path, default=default.log_dir, metavar="DIR",
                      help=f"folder for the jobs' slurm-<id>.out (default {default.log_dir})")
     job.add_argument("--local-directory", metavar="DIR",
                      help="worker scratch folder (default: dask's, in the job's temporary folder)")
-    job.add_argument("--death-timeout", type=float, default=default.death_timeout,
+    job.add_argument("--death-timeout", type=float, default=default.death_timeout, metavar="SECONDS",
                      help=f"seconds a worker waits for a lost scheduler before it exits "
                           f"(default {default.death_timeout:g})")
     net = launcher.add_argument_group("network")
-    net.add_argument("--interface", help="network interface of the scheduler and the workers, e.g. ib0 or lo")
+    net.add_argument("--interface", metavar="NAME",
+                     help="network interface of the scheduler and the workers, e.g. ib0 or lo")
     net.add_argument("--scheduler-host", metavar="ADDRESS",
                      help="address the scheduler listens on (default: --interface's, else the host name's)")
     launcher.add_argument("--log-every", type=int, default=default.log_every, metavar="N",
@@ -369,7 +465,10 @@ def _slurm_parser(commands):
 def _slurm(args) -> int:
     """Check everything, then run ``sweep`` on a scheduler whose workers are SLURM jobs."""
     options = slurm.Options(**{field.name: getattr(args, field.name) for field in dataclasses.fields(slurm.Options)})
-    _, out = _sweep_target(args)
+    _, out, complete = _sweep_target(args)
+    if complete:
+        print(f"{out}: complete, nothing to do")
+        return 0
     try:
         script = slurm.prepare(options, ask_slurm=not args.dry_run)
     except slurm.OptionError as err:
@@ -391,6 +490,30 @@ def _slurm(args) -> int:
         _say(f"dlasweep slurm {time.strftime('%H:%M:%S')} {line}")
 
     return slurm.launch(options, sweep, echo, task_lines=not sys.stderr.isatty())
+
+
+def _init(args) -> int:
+    """Write a shipped example spec (``sweep.examples``), or list them."""
+    from .sweep import examples
+
+    if args.list:
+        if args.name is not None or args.output is not None:
+            raise UsageError("--list: takes no NAME or -o")
+        width = max(map(len, examples.names()))
+        print("\n".join(f"{name:<{width}}  {examples.description(name)}" for name in examples.names()))
+        return 0
+    if args.name is None:
+        raise UsageError(f"NAME: missing; choose one of {', '.join(examples.names())} (--list describes them)")
+    try:
+        text = examples.text(args.name)
+    except KeyError as err:
+        raise UsageError(f"NAME: {err.args[0]}") from None
+    out = args.output or Path(f"{args.name}.toml")
+    _check_writable(out)
+    _check_new(out, args.force)
+    out.write_text(text, encoding="utf-8")
+    print(f"{out}: the {args.name} example; run it with `dlasweep sweep {out}`")
+    return 0
 
 
 def _report(args) -> int:

@@ -1,9 +1,11 @@
 """The command line: bad input exits 2 with one line and writes nothing; help from the parameter table;
 sweeps end to end; what ``info`` tells of a file."""
 
+import argparse
 import contextlib
 import importlib
 import io
+import re
 import shutil
 import signal
 import subprocess
@@ -22,6 +24,7 @@ from hypothesis import strategies as st
 import dlasweep as dla
 from conftest import ROOT, TINY_SPEC, colours_shown, files_under, science
 from dlasweep import cli
+from dlasweep._version import FORMAT
 from dlasweep.data import netcdf as store
 from dlasweep.data import ragged, schema
 from dlasweep.params import PARAMETERS
@@ -171,7 +174,7 @@ def test_grow_writes_the_cluster(run_cli, tmp_path):
 
 
 def check_design(ds, spec_text):
-    """The dataset as the README names it, for the tiny spec."""
+    """The dataset as docs/dataset.md names it, for the tiny spec."""
     assert ds["box_count"].dims == ("stickiness", "size", "n_particles", "seed", "scale")
     for name in ("n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "wall_time", "walk_steps"):
         assert ds[name].dims == ("stickiness", "size", "n_particles", "seed"), name
@@ -332,7 +335,7 @@ def test_resume_with_changed_spec_exits_2(run_cli, write_spec, tmp_path, dask_cl
     out = tmp_path / "tiny.nc"
     parts = tmp_path / "tiny.nc.parts"
     parts.mkdir()
-    (parts / "manifest.json").write_text('{"digest": "old", "identity": {"grid.seeds": [0]}}')
+    (parts / "manifest.json").write_text(f'{{"format": {FORMAT}, "digest": "old", "identity": {{"grid.seeds": [0]}}}}')
     status, _, err = run_cli("sweep", write_spec(), "-o", out, "--resume",
                              "--scheduler", dask_cluster.scheduler_address)
     assert status == 2 and "grid.seeds: [0] -> [0, 1, 2]" in err
@@ -662,3 +665,91 @@ def test_an_interrupt_before_any_cluster_finished_says_nothing_is_kept(tmp_path)
     assert child.returncode == 130, err
     assert err.strip().splitlines() == ["dlasweep sweep: interrupted; no cluster had finished, nothing is kept"]
     assert files_under(tmp_path) == {Path("big.toml")}
+
+
+def test_resume_of_a_complete_sweep_has_nothing_to_do(tiny_sweep, tmp_path, run_cli):
+    # A job script that reruns its sweep after a preemption ends green; before, this was refused (exit 2).
+
+
+    _, _, _, folder = tiny_sweep
+    out = tmp_path / "tiny.nc"
+    shutil.copy(folder / "tiny.nc", out)
+    with store.open_sweep(out) as ds:
+        assert ds.attrs["dlasweep_format"] == FORMAT
+    spec = tmp_path / "spec.toml"
+    spec.write_text(TINY_SPEC)
+    before = files_under(tmp_path), out.stat().st_mtime_ns
+    assert run_cli("sweep", spec, "-o", out, "--resume") == (0, f"{out}: complete, nothing to do\n", "")
+    assert (files_under(tmp_path), out.stat().st_mtime_ns) == before
+    spec.write_text(TINY_SPEC.replace("seeds = 3", "seeds = 4"))
+    status, stdout, err = run_cli("sweep", spec, "-o", out, "--resume")
+    assert status == 2 and stdout == "" and len(err.strip().splitlines()) == 1
+    assert f"-o {out}: exists and is not this spec's complete result (grid.seeds: [0, 1, 2] -> [0, 1, 2, 3]); " \
+           "nothing left to resume; pass --force to replace it" in err
+    assert (files_under(tmp_path), out.stat().st_mtime_ns) == before
+
+
+def test_init_writes_a_shipped_spec_and_lists_them(tmp_path, run_cli, monkeypatch):
+    from dlasweep.sweep import examples
+    from dlasweep.sweep.spec import load_spec
+
+    monkeypatch.chdir(tmp_path)
+    status, listed, err = run_cli("init", "--list")
+    assert status == 0 and err == ""
+    assert [line.split()[0] for line in listed.splitlines()] == examples.names()
+    assert {"quick", "tradeoff", "dimension", "dimension3d", "branching"} <= set(examples.names())
+    for name in examples.names():
+        assert 20 <= len(examples.description(name)) <= 100, name  # the first line, a comment: one short line
+        assert f"{name}  " in listed and examples.description(name) in listed
+        assert run_cli("init", name, "-o", f"my-{name}.toml")[0] == 0
+        assert (tmp_path / f"my-{name}.toml").read_text() == examples.text(name)
+        load_spec(tmp_path / f"my-{name}.toml")  # each one runs as written
+    assert run_cli("init", "quick")[0] == 0 and (tmp_path / "quick.toml").exists()  # default: NAME.toml
+    before = files_under(tmp_path)
+    for argv, message in ((["nosuch"], "dlasweep init: NAME: 'nosuch' is not a shipped spec; choose one of "
+                                       + ", ".join(examples.names())),
+                          (["quick", "-o", "quick.toml"], "-o quick.toml: exists; pass --force to replace it"),
+                          ([], "NAME: missing; choose one of"), (["--list", "quick"], "--list: takes no NAME")):
+        status, stdout, err = run_cli("init", *argv)
+        assert status == 2 and stdout == "" and len(err.strip().splitlines()) == 1 and message in err, err
+    assert files_under(tmp_path) == before
+    (tmp_path / "quick.toml").write_text("edited")
+    assert run_cli("init", "quick", "--force")[0] == 0
+    assert (tmp_path / "quick.toml").read_text() == examples.text("quick")
+
+
+def test_no_spec_stays_in_workflows():
+    # One copy of each example: the package's. A spec added to workflows/ ships once moved (docs/spec.md).
+    stray = sorted(p.name for p in (ROOT / "workflows").glob("*.toml"))
+    assert stray == [], f"{stray}: git mv them into dlasweep/sweep/specs/ to ship them"
+
+
+def _helps():
+    """The help of ``dlasweep`` and of each of its commands, by command."""
+    parser = cli._parser()
+    commands = next(a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {"": parser.format_help(), **{name: sub.format_help() for name, sub in commands.items()}}
+
+
+def test_every_command_has_a_one_line_description_and_examples():
+    helps = _helps()
+    assert {"grow", "export", "sweep", "slurm", "init", "report", "info", "bench"} <= set(helps)
+    for name, text in helps.items():
+        description = text.split("\n\n")[1]
+        assert description.endswith(".") and len(description.splitlines()) <= 2, (name, description)
+        examples = text.partition("examples:\n")[2].splitlines()
+        assert examples and all(line.startswith("  dlasweep ") for line in examples[:1]), (name, text)
+        # no tracker numbers, no repository paths a pip user does not have, no generic V for a value
+        assert not re.search(r"\bissues? ?\d|README|workflows/|DESIGN| V\b", text), (name, text)
+    assert "docs/spec.md" in helps["sweep"] and "dlasweep init" in helps["sweep"]
+    assert "[--jumps | --no-jumps]" in helps["grow"] and "--kill-factor FACTOR" in helps["grow"]
+
+
+def test_a_boolean_parameter_is_a_switch(tmp_path, run_cli):
+    for switch, value in (("--no-jumps", False), ("--jumps", True)):
+        out = tmp_path / f"{switch}.nc"
+        assert run_cli("grow", "-n", "30", switch, "-o", out)[0] == 0
+        with store.open_sweep(out) as ds:
+            assert bool(ds["jumps"]) is value
+    status, _, err = run_cli("grow", "-n", "30", "--jumps", "false", "-o", tmp_path / "x.nc")
+    assert status == 2 and "unrecognized arguments: false" in err

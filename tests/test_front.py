@@ -147,3 +147,42 @@ def test_version_is_the_installed_one():
     import dlasweep
 
     assert dlasweep.__version__ == _version()
+
+
+README_LINES = 150
+"""A README a newcomer reads in five minutes; the long sections live in docs/."""
+
+
+def readme_problems(text):
+    """What keeps ``text`` from being the README: too long, a tracker's number, a date, no picture first,
+    a link to a file that is not there."""
+    lines = text.splitlines()
+    problems = [f"{len(lines)} lines, more than {README_LINES}"] if len(lines) > README_LINES else []
+    problems += [f"names the tracker: {m.group(0)!r}" for m in re.finditer(r"\b[Ii]ssues? #?\d+", text)]
+    problems += [f"a date: {m.group(0)!r}" for m in re.finditer(r"\b20\d\d-\d\d-\d\d\b", text)]
+    pictures = [i for i, line in enumerate(lines) if line.startswith("![")]
+    if not pictures or pictures[0] > 5:
+        problems.append("no picture at the top")
+    for target in re.findall(r"\]\(([^)#]+)\)", text):
+        if not target.startswith("http") and not (ROOT / target).exists():
+            problems.append(f"links to {target}, which is not there")
+    return problems
+
+
+def test_the_readme_is_short_and_points_into_the_docs():
+    text = (ROOT / "README.md").read_text()
+    assert readme_problems(text) == []
+    for page in ("getting-started", "model", "spec", "dataset", "measuring-d", "clusters", "pictures", "api"):
+        assert f"(docs/{page}.md)" in text, page
+    for command in ("pip install .", "environment.yml", "make sweep", "make test", "dlasweep init"):
+        assert command in text, command
+
+
+def test_the_readme_check_finds_what_it_is_for():
+    good = (ROOT / "README.md").read_text()
+    assert readme_problems(good + "\n" * README_LINES) == [f"{len(good.splitlines()) + README_LINES} lines, "
+                                                           f"more than {README_LINES}"]
+    assert readme_problems(good.replace("## Install", "## Install (issue 71, 2026-12-07)")) == [
+        "names the tracker: 'issue 71'", "a date: '2026-12-07'"]
+    assert readme_problems(good.replace("![", "[", 1)) == ["no picture at the top"]
+    assert readme_problems(good + "[gone](docs/gone.md)\n") == ["links to docs/gone.md, which is not there"]

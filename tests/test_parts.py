@@ -2,6 +2,7 @@
 
 import contextlib
 import errno
+import json
 import os
 import socket
 import subprocess
@@ -14,6 +15,7 @@ import xarray as xr
 
 import dlasweep as dla
 from conftest import TINY_SPEC, Interrupt, files_under, finished_clusters, interrupt_after, science
+from dlasweep._version import FORMAT
 from dlasweep.data import netcdf as store
 from dlasweep.sweep import task as worker
 from dlasweep.sweep.parts import LOCK, MANIFEST, Parts, ResumeError, _lock
@@ -230,3 +232,46 @@ def test_walk_steps_at_each_count_are_the_cumulative_sums():
     steps = np.random.default_rng(2).integers(0, 2**32 - 1, 1000, dtype=np.uint64).astype(np.uint32)
     prefix = np.array([1, 1, 7, 500, 1000])
     np.testing.assert_array_equal(_prefix_sums(steps, prefix), np.cumsum(steps, dtype=np.int64)[prefix - 1])
+
+
+def as_written_by_0_1_0(parts):
+    """Make a parts folder what dlasweep 0.1.0 left: parts without the clusters' parents, a manifest without a
+    format (its identity naming the package version instead)."""
+    for file in parts.glob("part-*.npz"):
+        with np.load(file) as z:
+            members = {name: z[name] for name in z.files if not name.startswith("parent")}
+        np.savez(file, **members)
+    manifest = json.loads((parts / MANIFEST).read_text())
+    identity = {k: v for k, v in manifest["identity"].items() if k != "dlasweep format"}
+    (parts / MANIFEST).write_text(json.dumps({"digest": manifest["digest"],
+                                              "identity": {**identity, "dlasweep version": "0.1.0"}}))
+
+
+@pytest.mark.parametrize("resume", [[], ["--resume"]])
+def test_parts_of_another_format_are_refused_in_one_line_saying_what_to_do(resume, interrupted, run_cli, write_spec,
+                                                                          dask_cluster):
+    # Before the format version, resuming these read the first part, missed its parents and said "unreadable;
+    # delete it and run again with --resume", which failed again at the next part.
+    parts = Path(f"{interrupted}.parts")
+    manifest = json.loads((parts / MANIFEST).read_text())
+    assert manifest["format"] == FORMAT and manifest["dlasweep"] == dla.__version__
+    as_written_by_0_1_0(parts)
+    before = files_under(parts)
+    status, out, err = run_cli("sweep", write_spec(), "-o", interrupted, *resume,
+                               "--scheduler", dask_cluster.scheduler_address)
+    assert status == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert f"{parts}: parts of format 1 (dlasweep 0.1.0); this dlasweep ({dla.__version__}) resumes format " \
+           f"{FORMAT} only: finish the sweep with dlasweep 0.1.0, or delete {parts}" in err
+    assert files_under(parts) == before
+
+
+def test_the_identity_holds_the_format_not_the_package_version(monkeypatch):
+    # A patch release (same format) resumes the parts of the one before it; a new format does not.
+    from dlasweep.sweep import spec as spec_module
+
+    spec = parse_spec(TINY_SPEC)
+    digest = spec.digest()
+    monkeypatch.setattr(dla, "__version__", "0.2.1")
+    assert "dlasweep version" not in spec.identity() and spec.digest() == digest
+    monkeypatch.setattr(spec_module, "FORMAT", FORMAT + 1)
+    assert spec.digest() != digest

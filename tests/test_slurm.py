@@ -43,7 +43,7 @@ slurm_local = _workflow("slurm_local")
 DLASWEEP = Path(sys.executable).with_name("dlasweep")
 """The installed command, beside this Python (a venv's bin/)."""
 
-QUICK = ROOT / "workflows" / "quick.toml"
+QUICK = ROOT / "dlasweep" / "sweep" / "specs" / "quick.toml"
 TASKS = 8
 """SLOW_SPEC's dask tasks: eight clusters of 3e5, each worth more than one task's TASK_SECONDS."""
 

@@ -30,14 +30,17 @@ def test_counts_sorted_and_scalars_accepted():
     assert [t.spawn_key for t in spec.tasks()] == [(0, 4), (0, 9)]
 
 
-def test_quick_workflow_matches_the_issue():
-    spec = load_spec(ROOT / "workflows" / "quick.toml")
+SPECS = ROOT / "dlasweep" / "sweep" / "specs"
+
+
+def test_the_quick_example_is_small_and_sweeps_an_axis():
+    spec = load_spec(SPECS / "quick.toml")
     assert spec.fixed["model"] == "lattice" and spec.fixed["dim"] == 2
     assert max(spec.counts) >= 10_000 and len(spec.seeds) == 8 and spec.axes
 
 
-def test_every_workflow_spec_is_valid():
-    paths = sorted((ROOT / "workflows").glob("*.toml"))
+def test_every_shipped_spec_is_valid():
+    paths = sorted(SPECS.glob("*.toml"))
     assert {"quick.toml", "tradeoff.toml"} <= {path.name for path in paths}, paths
     for path in paths:
         spec = load_spec(path)

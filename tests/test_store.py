@@ -1,4 +1,4 @@
-"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (README, "The dataset"), CF
+"""The netCDF layer (dlasweep/data/netcdf.py): one round trip of the dataset layout (docs/dataset.md), CF
 compliance, atomic writes, bad files."""
 
 import os
@@ -416,3 +416,34 @@ def test_an_opened_dataset_closes_its_file(saved):
     with store.open_sweep(path) as ds:
         assert ds["jumps"].dtype == bool and str(path) in open_files()
     assert str(path) not in open_files()
+
+
+def _set_format(path, value):
+    with netCDF4.Dataset(path, "a") as nc:
+        if value is None:
+            nc.delncattr("dlasweep_format")
+        else:
+            nc.setncattr("dlasweep_format", value)
+
+
+def test_every_file_records_its_format_and_one_of_a_later_format_is_refused_in_one_line(saved, tmp_path, run_cli):
+    from dlasweep._version import FORMAT
+
+    _, path = saved
+    with store.open_sweep(path) as ds:
+        assert ds.attrs["dlasweep_format"] == FORMAT and store.file_format(ds) == FORMAT
+    one = tmp_path / "one.nc"
+    cluster = Cluster(np.array([[0, 0], [1, 0]]), np.array([0, 5]), "ok", resolve(), parents=np.array([-1, 0]))
+    store.save(store.cluster_dataset(cluster, seed=0), one)
+    with store.open_sweep(one) as ds:
+        assert store.file_format(ds) == FORMAT
+    _set_format(path, None)  # a file from before the attribute: format 1, which still opens
+    with store.open_sweep(path) as ds:
+        assert store.file_format(ds) == 1
+    for value, shown in ((FORMAT + 1, f"file format {FORMAT + 1}"), ("two", "file format 'two'")):
+        _set_format(path, value)
+        with pytest.raises(store.StoreError, match=re.escape(f"{path}: {shown}, from dlasweep ")):
+            store.open_sweep(path)
+        status, out, err = run_cli("info", path)
+        assert status == 2 and out == "" and len(err.strip().splitlines()) == 1
+        assert f"reads formats 1 to {FORMAT}: upgrade dlasweep to read it" in err

@@ -93,6 +93,11 @@ def test_the_installed_wheel_runs_every_documented_command(installed):
     assert "report written" in _run(installed, "report", "tiny.nc", "-o", "report")
     assert (home / "report" / "dimension_vs_n.png").is_file()
     assert "headline D" in _run(installed, "info", "tiny.nc")
+    # the newcomer's path: an example spec from the wheel itself, no clone
+    assert "quick" in _run(installed, "init", "--list")
+    _run(installed, "init", "quick", "-o", "q.toml")
+    assert (home / "q.toml").read_text() == (PACKAGE / "sweep" / "specs" / "quick.toml").read_text()
+    assert "16 clusters" in _run(installed, "sweep", "q.toml", "-o", "q.nc")
     # the one model the commands above compiled: each other kernel would add one to three minutes of compiling
     # to the longest test of the suite; their files are imported above, and the tree's tests grow every model
     _run(installed, "bench", "--quick", "--model", "lattice-2d", "-o", "bench")

@@ -41,7 +41,7 @@ from dlasweep.reporting.pictures import draw_cluster
 MODELS = {"lattice": "square lattice", "offlattice": "disks, off the lattice"}
 
 D_2D = 1.708
-"""D of 2D off-lattice DLA from 114 clusters up to 300 000 particles (README, workflows/dimension.toml)."""
+"""D of 2D off-lattice DLA from 114 clusters up to 300 000 particles (`dlasweep init dimension`)."""
 
 
 def checked(n, seed, output) -> Path:
@@ -202,6 +202,6 @@ for paragraph in (
     "Box counting on one finite cluster reads low: its smallest boxes see the particles, its largest "
     "the cluster's edge. The mass-radius fit uses the whole growth history and is the better estimate.",
     "One cluster's interval is that of its own growth curve; a precise D averages many clusters: "
-    "`dlasweep sweep workflows/dimension.toml`.",
+    "`dlasweep init dimension && dlasweep sweep dimension.toml`.",
 ):
     print(textwrap.fill(paragraph, 78, initial_indent="  ", subsequent_indent="  ", break_on_hyphens=False))

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .. import params as _params
-from .._version import __version__
+from .._version import FORMAT, __version__
 from ..params import one_line
 from .paths import writable
 from .schema import (
@@ -432,7 +432,25 @@ def _open(path, required, chunks=None) -> xr.Dataset:
         ds.close()
         what = f"missing {', '.join(missing)}" if missing else "no 'source = dlasweep' attribute"
         raise StoreError(f"{path}: not a dlasweep dataset ({what})")
+    written = file_format(ds)
+    if written is None or written > FORMAT:
+        ds.close()
+        which = f"file format {written}" if written else f"file format {ds.attrs['dlasweep_format']!r}"
+        raise StoreError(f"{path}: {which}, from {ds.attrs['source']}; this dlasweep ({__version__}) reads "
+                         f"formats 1 to {FORMAT}: upgrade dlasweep to read it")
     return ds
+
+
+def file_format(ds: xr.Dataset) -> int | None:
+    """The format version (``dlasweep._version.FORMAT``) a file was written in: its ``dlasweep_format``
+    attribute, 1 for a file written before the attribute existed (which still opens: the readers keep that
+    layout's paths), None for an attribute that is not a positive integer."""
+    value = ds.attrs.get("dlasweep_format", 1)
+    try:
+        written = int(value)
+    except (TypeError, ValueError):
+        return None
+    return written if written == value and written >= 1 else None
 
 
 def _coordinate(values, dtype=None) -> np.ndarray:
@@ -469,7 +487,7 @@ def describe(ds: xr.Dataset, schema=None, **globals_) -> xr.Dataset:
     """
     for name, var in ds.variables.items():
         var.attrs.update(attributes(name, var.dtype, schema))
-    first = {"Conventions": "CF-1.8", **globals_, "source": f"dlasweep {__version__}"}
+    first = {"Conventions": "CF-1.8", **globals_, "source": f"dlasweep {__version__}", "dlasweep_format": FORMAT}
     ds.attrs = {**first, **{k: v for k, v in ds.attrs.items() if k not in first}}
     return ds
 

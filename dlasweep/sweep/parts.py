@@ -3,7 +3,8 @@
 Finished batches go at once to ``OUT.parts/part-<id>.npz`` (written under a
 temporary name, then renamed; see ``Parts``). A resumed run keeps the
 clusters finished there and computes the rest; ``OUT.parts/manifest.json``
-records the spec's identity so that a changed spec is refused. A run holds
+records the spec's identity and the format version (``dlasweep._version.FORMAT``) so that a changed
+spec, or parts of another layout, are refused. A run holds
 an flock on ``OUT.parts/.lock`` from start to end, so a second run on the
 same output is refused, and a killed run's lock is free at once. The
 stored clusters' positions go into ``OUT.parts/particles.nc`` while the
@@ -26,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._version import FORMAT, __version__
 from .spec import differences
 
 MANIFEST, LOCK, PARTICLES = "manifest.json", ".lock", "particles.nc"
@@ -232,7 +234,7 @@ def parts_folder(spec, out, resume):
     fails before any part is saved: renamed away under the lock, so no other
     run finds it half deleted, then deleted once the lock is released.
     """
-    identity = {"digest": spec.digest(), "identity": spec.identity()}
+    identity = {"format": FORMAT, "dlasweep": __version__, "digest": spec.digest(), "identity": spec.identity()}
     if out is None:
         with tempfile.TemporaryDirectory(prefix="dlasweep-") as tmp:
             yield Parts(Path(tmp))
@@ -317,14 +319,28 @@ def _lock(folder) -> int:
 
 
 def _check_manifest(path, identity, resume):
-    """Refuse an existing parts folder without ``resume``, or from another spec (``ResumeError``)."""
-    if not resume:
-        raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
+    """Refuse an existing parts folder of another format, without ``resume``, or from another spec
+    (``ResumeError``).
+
+    The format comes first: parts of another layout cannot be resumed
+    whatever the spec, so the message says so rather than asking for
+    ``--resume``. A manifest without one is of format 1 (dlasweep 0.1.0).
+    """
     manifest = path / MANIFEST
     try:
         old = json.loads(manifest.read_text())
     except (OSError, ValueError):
         raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh") from None
+    if not isinstance(old, dict):
+        raise ResumeError(f"{manifest}: missing or damaged; delete {path} to start afresh")
+    written = old.get("format", 1)
+    if written != FORMAT:
+        by = old.get("dlasweep", "0.1.0" if written == 1 else "another version")
+        raise ResumeError(f"{path}: parts of format {written} (dlasweep {by}); this dlasweep ({__version__}) "
+                          f"resumes format {FORMAT} only: finish the sweep with dlasweep {by}, or delete "
+                          f"{path} and run it afresh")
+    if not resume:
+        raise ResumeError(f"{path}: left by an earlier run; pass --resume to continue it, or delete it")
     if old.get("digest") != identity["digest"]:
         changes = differences(old.get("identity", {}), identity["identity"])
         raise ResumeError(f"cannot resume: the spec differs from the one in {path} ("

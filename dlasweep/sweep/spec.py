@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import params as _params
-from .._version import __version__
+from .._version import FORMAT
 
 MAX_PARTICLES = 100_000_000
 """Largest particle count a spec may ask for (a guard against typos like 1e12)."""
@@ -179,6 +179,10 @@ class Spec:
         replicates are grown, not what any replicate is, so finished tasks
         stay valid when they change. ``store_clusters`` is in when set: a
         task whose cluster is not stored keeps no positions in its part.
+        The files' format version (``dlasweep._version.FORMAT``) is in, not
+        the package version: a release that grows the same clusters into the
+        same parts keeps the format, so its patch releases resume each
+        other's parts, and one that changes either changes the format.
         """
         stored = {} if self.store_clusters is None else {"run.store_clusters": self.store_clusters}
         return {
@@ -190,7 +194,7 @@ class Spec:
             "model (axis order)": list(self.axes),
             "run.root_seed": self.root_seed,
             **stored,
-            "dlasweep version": __version__,
+            "dlasweep format": FORMAT,
         }
 
     def digest(self) -> str:
