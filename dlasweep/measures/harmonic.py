@@ -104,9 +104,9 @@ def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     walked apart (``blocks``, ``kernels.harmonic.frozen_walks``) give the same
     walkers, so that a measurement can be shared between workers.
 
-    A model of many walkers at once (``walkers > 1`` in its parameters) is
-    measured with walkers released one at a time, as its single walker would
-    be: against a frozen cluster its walkers do not meet. A walker that spends
+    A model of many walkers at once (``walkers > 1`` in its parameters) has
+    its walkers released one at a time here, as its single walker would be:
+    against a frozen cluster its walkers do not meet. A walker that spends
     the model's ``max_steps`` moves ends the measurement (``status``).
 
     Parameters
