@@ -3,9 +3,9 @@
 The walkers are the growth kernels' own: off the lattice each is
 ``offlattice.walker.walk_to_contact`` (release on the launch circle, exact
 return, jumps, the ray cast to contact, the rebound of a walker that does
-not stick), on it ``lattice.grow._grow`` with its ``frozen`` argument, the
-single walker's loop that records the site from which a walker would stick
-instead of attaching it. The grids are built once from the cluster's points,
+not stick), on it ``lattice.lattice_growth._grow`` with its ``frozen``
+argument, the single walker's loop that records the site from which a walker
+would stick instead of attaching it. The grids are built once from the cluster's points,
 as growth builds them (``offlattice.grid.build_grid``, ``lattice.words.rebuild``
 at the side that ``lattice.walker.attach`` would have grown to), and only
 read. With lockstep walkers (``walkers > 1``) each is released and walks as
@@ -25,7 +25,7 @@ from numba import literally
 from .._jit import call_literal, jit
 from . import model as codes
 from .lattice.exits import exit_tables, unit_moves
-from .lattice.grow import _grow
+from .lattice.lattice_growth import _grow
 from .lattice.parents import touched
 from .lattice.walker import GROWTH
 from .lattice.words import rebuild

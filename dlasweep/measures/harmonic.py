@@ -19,7 +19,7 @@ from .. import params as _params
 
 KEY = 0x48415252
 """The first entry of every block's spawn key (``SeedSequence(seed, spawn_key=(KEY, b))``): a measurement's
-streams are never those of a growth (``grow.rng_for``) or a sweep's children from the same seed."""
+streams are never those of a growth (``growth.cluster.rng_for``) or a sweep's children from the same seed."""
 
 
 @dataclass(frozen=True)

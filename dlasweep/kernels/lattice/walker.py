@@ -1,8 +1,8 @@
 """The lattice walker's pieces: the site a point rounds to, the box, single
 exact steps near the cluster (``near_step``, ``near_walk``; ``touches`` and
-``step_to``, which ``grow._grow`` spells out in its hot loop), the release,
-the lower bounds of the distance to the cluster (``distance_bound``, spelled
-out there too) and the attachment of a particle.
+``step_to``, which ``lattice_growth._grow`` spells out in its hot loop), the
+release, the lower bounds of the distance to the cluster (``distance_bound``,
+spelled out there too) and the attachment of a particle.
 """
 
 import numpy as np
