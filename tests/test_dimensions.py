@@ -11,8 +11,8 @@ import sys
 SCRIPT = """
 import json
 import dlasweep as dla
-from dlasweep.kernels.lattice import grow as lattice
-from dlasweep.kernels.offlattice import grow as offlattice
+from dlasweep.kernels.lattice import lattice_growth as lattice
+from dlasweep.kernels.offlattice import offlattice_growth as offlattice
 for model in ("lattice", "offlattice"):
     for seed in (1, 2):
         dla.grow(300, seed=seed, model=model, dim=2)

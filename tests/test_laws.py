@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 import dlasweep as dla
 from dlasweep.kernels.lattice.exits import unit_moves
-from dlasweep.kernels.lattice.grow import occupy
+from dlasweep.kernels.lattice.lattice_growth import occupy
 from dlasweep.kernels.model import neighbour_stickiness
 from dlasweep.measures.shape import anisotropy, radius_of_gyration
 from dlasweep.params import resolve

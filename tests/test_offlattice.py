@@ -550,12 +550,12 @@ def test_rows_attached_since_a_sort_sorted_alone_keep_every_list(case):
 
 def test_a_3d_cluster_grown_in_sorted_rows_keeps_its_parents_and_contacts():
     """Past ``SORT_FIRST`` particles a 3D cluster's rows are stored cell after cell
-    (``grow.BY_CELL``) and sorted again as it grows: what comes out is still in
+    (``offlattice_growth.BY_CELL``) and sorted again as it grows: what comes out is still in
     attachment order, each particle touching its parent, the nearest earlier one."""
-    from dlasweep.kernels.offlattice import grow
+    from dlasweep.kernels.offlattice import offlattice_growth as growth
 
-    assert grow.BY_CELL[3]
-    n = int(grow.SORT_FIRST * grow.SORT_GROWTH ** 3) + 100  # three sorts
+    assert growth.BY_CELL[3]
+    n = int(growth.SORT_FIRST * growth.SORT_GROWTH ** 3) + 100  # three sorts
     c = dla.grow(n, seed=2, **OFF, dim=3)
     assert naive.min_pair(c.points, c.params) >= 1.0 - 1e-9
     np.testing.assert_allclose(naive.contacts(c.points, c.params), 1.0, atol=1e-9)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from dlasweep.kernels import maps
-from dlasweep.kernels.lattice import grow as lattice_grow
+from dlasweep.kernels.lattice import lattice_growth as lattice_grow
 from dlasweep.kernels.lattice import walker as lattice_walker
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.words import rebuild

@@ -110,7 +110,8 @@ def compiled(model: str, dim: int, walkers: int = 1) -> bool:
     Only this process's cache is looked at: the embedded cluster's too.
     """
     # The kernels name no entry kernel of their own yet: the one that takes most of the compile time.
-    return {"lattice": lattice.grow.compiled, "offlattice": offlattice.grow.compiled}[model](dim, walkers)
+    kernels = {"lattice": lattice.lattice_growth, "offlattice": offlattice.offlattice_growth}
+    return kernels[model].compiled(dim, walkers)
 
 
 def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:

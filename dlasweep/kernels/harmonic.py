@@ -3,9 +3,9 @@
 The walkers are the growth kernels' own: off the lattice each is
 ``offlattice.walker.walk_to_contact`` (release on the launch circle, exact
 return, jumps, the ray cast to contact, the rebound of a walker that does
-not stick), on it ``lattice.grow._grow`` with its ``frozen`` argument, the
-single walker's loop that records the site from which a walker would stick
-instead of attaching it. The grids are built once from the cluster's points,
+not stick), on it ``lattice.lattice_growth._grow`` with its ``frozen``
+argument, the single walker's loop that records the site from which a walker
+would stick instead of attaching it. The grids are built once from the cluster's points,
 as growth builds them (``offlattice.grid.build_grid``, ``lattice.words.rebuild``
 at the side that ``lattice.walker.attach`` would have grown to), and only
 read. With lockstep walkers (``walkers > 1``) each is released and walks as
@@ -25,7 +25,7 @@ from numba import literally
 from .._jit import call_literal, jit
 from . import model as codes
 from .lattice.exits import exit_tables, unit_moves
-from .lattice.grow import _grow
+from .lattice.lattice_growth import _grow
 from .lattice.parents import touched
 from .lattice.walker import GROWTH
 from .lattice.words import rebuild
@@ -113,12 +113,38 @@ def _offlattice_walk(dimension, model, points, rngs, walkers, hits, where, steps
 
 @jit
 def _lattice_walk(dimension, model, moves, points, rngs, walkers, sites, steps, t_start, t_cut, t_alias, t_off):
-    """Walk ``walkers`` walkers against the lattice cluster ``points`` (int32 (n, dim)), ``BLOCK`` to each
-    Generator of ``rngs``: ``sites`` (int32 (walkers, dim)) receives the site from which each would stick,
-    ``steps`` its moves. Returns the walkers that stuck and the status, as ``_offlattice_walk``.
+    """Walk ``walkers`` walkers against the lattice cluster ``points``, ``BLOCK`` to each Generator of ``rngs``.
 
     The grid is ``words.rebuild``'s at the side growth would have reached (``walker.attach``'s rule),
-    and each block is ``grow._grow``'s single walker with it frozen."""
+    and each block is ``lattice_growth._grow``'s single walker with it frozen.
+
+    Parameters
+    ----------
+    dimension : int
+        The model's dimension, a literal (``lattice_growth._grow`` is compiled for it).
+    model : Model
+        The model (``kernels.model.Model``).
+    moves : int64 (M, 3)
+        Unit moves, which are also the contacts (``exits.unit_moves``).
+    points : int32 (n, dim)
+        The frozen cluster's sites.
+    rngs : list of numpy.random.Generator
+        One a block, ``ceil(walkers / BLOCK)`` of them.
+    walkers : int
+        Walkers to walk.
+    sites : int32 (walkers, dim)
+        Receives the site from which each walker would stick.
+    steps : uint32 (walkers,)
+        Receives its moves from its first release (``model.diffusion_time``).
+    t_start, t_cut, t_alias, t_off
+        The exit tables (``exits.exit_tables``), as ``lattice_growth._grow`` takes them.
+
+    Returns
+    -------
+    done : int
+        Walkers that stuck, as ``_offlattice_walk`` returns them.
+    status : int, ``OK`` or ``STEP_LIMIT``
+    """
     literally(dimension)
     dim = np.int64(2) if dimension == 2 else np.int64(3)
     count = len(points)

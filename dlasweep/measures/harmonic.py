@@ -19,7 +19,7 @@ from .. import params as _params
 
 KEY = 0x48415252
 """The first entry of every block's spawn key (``SeedSequence(seed, spawn_key=(KEY, b))``): a measurement's
-streams are never those of a growth (``grow.rng_for``) or a sweep's children from the same seed."""
+streams are never those of a growth (``growth.cluster.rng_for``) or a sweep's children from the same seed."""
 
 
 @dataclass(frozen=True)
@@ -104,9 +104,9 @@ def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     walked apart (``blocks``, ``kernels.harmonic.frozen_walks``) give the same
     walkers, so that a measurement can be shared between workers.
 
-    A model of many walkers at once (``walkers > 1`` in its parameters) is
-    measured with walkers released one at a time, as its single walker would
-    be: against a frozen cluster its walkers do not meet. A walker that spends
+    A model of many walkers at once (``walkers > 1`` in its parameters) has
+    its walkers released one at a time here, as its single walker would be:
+    against a frozen cluster its walkers do not meet. A walker that spends
     the model's ``max_steps`` moves ends the measurement (``status``).
 
     Parameters

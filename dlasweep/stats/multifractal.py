@@ -175,8 +175,13 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         Smallest box side (particle sizes): below, a box holds part of one particle.
     max_fraction : float
         Largest box side, as a fraction of the extent of the points that received counts.
-    min_decades, min_points, flat_tolerance
-        The fitted window's rules (``fit.fit_dimension``).
+    min_decades : float
+        Narrowest window fitted, in decades of box side (``fit.fit_dimension``).
+    min_points : int
+        Fewest sides in the window fitted (``fit.fit_dimension``).
+    flat_tolerance : float
+        Change of the local slope across a window, beyond twice its standard error, that
+        still counts as flat (``fit.fit_dimension``).
     tolerance : float
         Largest difference between the sums of half the counts and of all, in log Z / (q - 1),
         at an admissible side.

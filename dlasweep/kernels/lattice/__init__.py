@@ -7,12 +7,12 @@
 - ``walker``: the pieces of one walker's walk (single steps, contact, the
   distance bounds, release) and the attachment of a particle;
 - ``lockstep``: many walkers at once;
-- ``grow``: the walk from release to contact, and ``grow_lattice``, the entry
-  point;
+- ``lattice_growth``: the walk from release to contact, and ``grow_lattice``,
+  the entry point;
 - ``parents``: who stuck to whom, found from the sites after growth.
 """
 
 from .exits import exit_tables
-from .grow import grow_lattice
+from .lattice_growth import grow_lattice
 
 __all__ = ["exit_tables", "grow_lattice"]

@@ -99,7 +99,21 @@ def _site_index(points, period, tile):
     """The index of the occupied sites of ``points`` (n >= 1) that ``lattice_parents`` describes:
     the box's lowest site and side in tiles, the directory of tiles, which of its squares (cubes)
     hold one, each held tile's word and offset, and the particles' indices in tile order.
-    ``tile`` (int32 (n,)) receives each particle's tile number."""
+
+    Parameters
+    ----------
+    points : int32 (n, dim)
+        The sites, n >= 1.
+    period : int
+        A substrate's period (its periodic coordinates indexed in [0, period)); 0 without one.
+    tile : int32 (n,)
+        Receives each particle's tile number (the caller may pass an array it reuses).
+
+    Returns
+    -------
+    lo, side, directory, used, words, offsets, index
+        As above, in that order.
+    """
     n, dim = points.shape
     lo, side = _box(points, dim, period)
     bits = DIRECTORY_BITS[dim - 2]

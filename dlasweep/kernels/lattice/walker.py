@@ -1,8 +1,8 @@
 """The lattice walker's pieces: the site a point rounds to, the box, single
 exact steps near the cluster (``near_step``, ``near_walk``; ``touches`` and
-``step_to``, which ``grow._grow`` spells out in its hot loop), the release,
-the lower bounds of the distance to the cluster (``distance_bound``, spelled
-out there too) and the attachment of a particle.
+``step_to``, which ``lattice_growth._grow`` spells out in its hot loop), the
+release, the lower bounds of the distance to the cluster (``distance_bound``,
+spelled out there too) and the attachment of a particle.
 """
 
 import numpy as np
@@ -45,7 +45,25 @@ def outside(q, dim, line, lo, hi):
 @borrow
 def occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period):
     """How many of site q's neighbours under ``moves`` are occupied, the substrate's
-    sites (below height 0) counted as occupied: B of the ``neighbour_alpha`` law."""
+    sites (below height 0) counted as occupied: B of the ``neighbour_alpha`` law.
+
+    Parameters
+    ----------
+    words : uint64 (...)
+        The grid's words: the occupancy (segment 0), then level 1.
+    dim : int
+        2 or 3.
+    start, blocks : int64 (S + 1,), int64 (S,)
+        The words' layout (``maps.layout``).
+    width, off : int
+        The grid's side in sites, and its offset: site q is cell q + ``off``.
+    q : int64 (3,)
+        The site whose neighbours are counted.
+    moves : int64 (M, 3)
+        Unit moves: the neighbourhood.
+    period : int
+        A substrate's period; 0: none (no substrate, nothing wraps).
+    """
     b = 0
     for m in range(moves.shape[0]):
         n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
@@ -65,7 +83,20 @@ def occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period)
 def contact_sticks(words, dim, start, blocks, width, off, q, moves, period, stickiness, alpha, s0, s1, s2, s3):
     """Whether a walker at site q, which touches the cluster, sticks under the ``neighbour_alpha`` law
     (``model.neighbour_stickiness``, B from ``occupied_neighbours``, B_full the neighbourhood less
-    one), and the stream's new state (registers, as ``model.sticks_xo``)."""
+    one), and the stream's new state (registers, as ``model.sticks_xo``).
+
+    Parameters
+    ----------
+    words, dim, start, blocks, width, off, q, moves, period
+        As ``occupied_neighbours`` takes them.
+    stickiness : float
+        The probability of sticking with B_full or more occupied neighbours.
+    alpha : float
+        The law's ``neighbour_alpha``, in (0, 1]: each occupied neighbour short of
+        B_full multiplies ``stickiness`` by it.
+    s0, s1, s2, s3 : uint64
+        The xoshiro256+ state (``walk.xo``).
+    """
     b = occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period)
     return sticks_xo(neighbour_stickiness(stickiness, alpha, b, moves.shape[0] - 1), s0, s1, s2, s3)
 
@@ -74,8 +105,10 @@ def contact_sticks(words, dim, start, blocks, width, off, q, moves, period, stic
 def near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha):
     """One site of the exact lattice walk: stick, or step to a random neighbour.
 
-    The walker first sticks with probability ``stickiness`` if it touches the
-    cluster, else it steps (staying put when the neighbour is occupied).
+    The walker first sticks if it touches the cluster, with probability
+    ``stickiness`` (under the ``neighbour_alpha`` law, ``alpha`` < 1: scaled by
+    the occupied neighbours, ``contact_sticks``), else it steps (staying put
+    when the neighbour is occupied).
     ``near`` False promises that no particle is within two sites, which
     spares the contact and occupancy tests. Returns whether it stuck.
 
@@ -101,6 +134,9 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
         The xoshiro256+ stream.
     near : bool
         Whether a particle may lie within two sites.
+    alpha : float
+        The ``neighbour_alpha`` law's alpha, in (0, 1] (``model.neighbour_stickiness``);
+        1: every contact sticks with ``stickiness``, and the neighbours go uncounted.
     """
     up = dim - 1
     line = period > 0
@@ -162,6 +198,8 @@ def near_walk(
         Kill (or return) radius beyond which the walk ends; 0: none.
     budget : int
         Most steps; 0: no limit.
+    alpha : float
+        The ``neighbour_alpha`` law's alpha, as ``near_step`` takes it.
 
     Returns
     -------

@@ -11,8 +11,8 @@ Two particles touch when their centres are exactly one diameter apart.
 - ``walker``: one walker's release, its walk from release to contact, and
   the attachment of the particle it becomes;
 - ``lockstep``: many walkers at once;
-- ``grow``: the growth of a cluster from those, and ``grow_offlattice``, the
-  entry point.
+- ``offlattice_growth``: the growth of a cluster from those, and
+  ``grow_offlattice``, the entry point.
 
 Far from the cluster a walker moves by walk-on-spheres jumps: it jumps
 uniformly onto the sphere whose radius is a lower bound on its free
@@ -95,6 +95,6 @@ pinned copy of ``grid.walk_bound``).
 """
 
 from .contact import EPS
-from .grow import grow_offlattice
+from .offlattice_growth import grow_offlattice
 
 __all__ = ["EPS", "grow_offlattice"]

@@ -19,8 +19,8 @@ def grow_in_lockstep(n, model, marks, rng, rs, t0, times, passed, pts, order, st
     They start uniformly in the box (not on a particle) and take single
     steps in turn (unit ray casts, or Gaussian steps); none is relaunched, a
     wall removes it, and one that a new particle covers merges into it.
-    Takes over from ``grow._grow`` once the seed is placed (its arguments are
-    ``_grow``'s state) and returns (count, status).
+    Takes over from ``offlattice_growth._grow`` once the seed is placed (its
+    arguments are ``_grow``'s state) and returns (count, status).
 
     Parameters
     ----------
