@@ -330,3 +330,20 @@ def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
     line = next(text for text in (tmp_path / "report.md").read_text().splitlines()
                 if text.startswith("- stickiness=0.1 against stickiness=1.0: "))
     assert line.endswith("(resolved)") == (abs(value) > half) and ("|dev| <" in line) == (abs(value) <= half)
+
+
+def test_report_says_whether_d_contains_the_published_value():
+    """An interval that holds 1.7100 says so, one that misses it says that, a lattice sweep says nothing."""
+    from types import SimpleNamespace
+
+    from dlasweep.reporting.text import _against_reference
+
+    def row(lo, hi):
+        return {"D_ci_lo": lo, "D_ci_hi": hi, "D_inf_ci_lo": np.nan, "D_inf_ci_hi": np.nan}
+
+    sweep = SimpleNamespace(reference=1.71, dim=2)
+    (line, blank) = _against_reference(sweep, [("a", row(1.705, 1.722)), ("b", row(1.712, 1.72))])
+    assert "1.7100(3)" in line and blank == ""
+    assert "a: D [1.7050, 1.7220] contains it, D_inf: no interval" in line
+    assert "b: D [1.7120, 1.7200] does not contain it" in line
+    assert _against_reference(SimpleNamespace(reference=None, dim=2), [("a", row(1.7, 1.8))]) == []

@@ -45,6 +45,37 @@ def _interval(row, name) -> str:
     return f"{value:.3f} [{lo:.3f}, {hi:.3f}]" if np.isfinite(lo) else f"{value:.3f} (no CI)"
 
 
+def _against_reference(sweep, rows) -> list:
+    """Whether each configuration's 95% intervals of D and D_inf contain the published D of its model.
+
+    Parameters
+    ----------
+    sweep : Readout
+        The sweep; ``sweep.reference`` is the published D of off-lattice DLA in its dimension, None on a
+        lattice (whose clusters have no published asymptote to hold them to).
+    rows : list of (str, dict)
+        Each configuration's label and summary row at the largest count.
+
+    Returns
+    -------
+    list of str
+        Markdown lines: one sentence a configuration and a blank line, or none without a reference.
+    """
+    if sweep.reference is None:
+        return []
+
+    def verdict(row, name):
+        lo, hi = row[f"{name}_ci_lo"], row[f"{name}_ci_hi"]
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            return f"{name}: no interval"
+        inside = lo <= sweep.reference <= hi
+        return f"{name} [{lo:.4f}, {hi:.4f}] {'contains' if inside else 'does not contain'} it"
+
+    published = f"{sweep.reference:.4f}(3)" if sweep.dim == 2 else f"about {sweep.reference:.2f}"
+    return [f"Against the published D of {sweep.dim}D off-lattice DLA, {published}: "
+            + "; ".join(f"{label}: {verdict(row, 'D')}, {verdict(row, 'D_inf')}" for label, row in rows) + ".", ""]
+
+
 def _headline(row) -> str:
     shown = _interval(row, "D")
     if shown != "-":
@@ -174,6 +205,7 @@ def write_report(sweep, figures, path) -> Path:
         f"Meakin 1989); 3D DLA about {REFERENCE_D[3]:.2f}. "
         f"This sweep: {sweep.dim}D {'lattice' if sweep.lattice else 'off-lattice'}.",
         "",
+        *_against_reference(sweep, rows),
         "## How D is measured, and how far to trust it",
         "",
         "- **Mass-radius, ensemble** (the estimator to quote): <Rg>(n) averaged over seeds, from the end of "
