@@ -30,9 +30,12 @@ root_seed = 12345
 """
 """Twelve small clusters: one swept parameter, a bounded and an unbounded box."""
 
-FIRST_FILES = ("test_wheel.py", "test_measure.py", "test_slurm.py")
+FIRST_FILES = ("test_wheel.py", "test_harmonic.py", "test_measure.py", "test_docs.py", "test_slurm.py",
+               "test_invariants.py", "test_laws.py")
 """Run first, longest first: the longest files (a fresh venv that compiles every kernel again, about
-5 minutes; the box counts against their references, 3; the SLURM cluster, 2), which ``make test``
+5 minutes; the harmonic measure's frozen-cluster kernels of every model, compiled; the box counts against
+their references, 3; the documentation built twice, its lesson compiling the kernels; the SLURM cluster,
+2; every variant grown to 2e4; the growth laws' variants), which ``make test``
 gives one worker each while the other takes the rest; last, one ran on while the other idled. The
 order holds because ``make test`` keeps it (``--no-loadscope-reorder``): by default xdist sends the
 files with the most tests first, and the wheel's four went last."""
