@@ -209,19 +209,21 @@ def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
     lines = []
     ds = bench.run_bench(full=True, models=["lattice-3d"], echo=lines.append)
     assert {call[:3] for call in calls} == {("lattice", 3, True)}
-    assert set(ds.model.values) == {"lattice-3d"} and set(ds.method.values) == {"exact"}
+    # the model's exact runs and its growth laws' runs, nothing of another model
+    assert set(ds.model.values) == {"lattice-3d"} and set(ds.method.values) == {"exact", *bench.LAWS["lattice-3d"]}
     assert [line.split(" |")[0] for line in lines if line.startswith("| ")][1:] == ["| lattice-3d"]
     # the naive walk comes with lattice-2d; a model named twice runs once
     calls.clear()
     ds = bench.run_bench(quick=True, models=["lattice-2d", "lattice-2d"], echo=lines.append)
     quick = bench.QUICK_COUNT
-    assert sorted(calls) == [("lattice", 2, False, quick // 4), ("lattice", 2, True, quick // 4),
-                             ("lattice", 2, True, quick)]
+    laws = [("lattice", 2, True, quick)] * len(bench.LAWS["lattice-2d"])  # each law beside the exact method
+    assert sorted(calls) == sorted([("lattice", 2, False, quick // 4), ("lattice", 2, True, quick // 4),
+                                    ("lattice", 2, True, quick), *laws])
     # from the command line, and a model it does not know: one line that names it, status 2, nothing written
     out = tmp_path / "bench"
     assert main(["bench", "--quick", "--model", "offlattice-2d", "--model", "lattice-3d", "-o", str(out)]) == 0
     with xr.open_dataset(out / "bench.nc") as ds:
-        assert sorted(ds.model.values) == ["lattice-3d", "offlattice-2d"]
+        assert sorted(set(ds.model.values)) == ["lattice-3d", "offlattice-2d"]
     capsys.readouterr()
     assert main(["bench", "--quick", "--model", "lattice-4d", "-o", str(tmp_path / "never")]) == 2
     err = capsys.readouterr().err

@@ -87,7 +87,7 @@ LAWS = {
     "offlattice-3d": {"contact_distance=0.5": {"contact_distance": 0.5}},
 }
 """The growth laws each model runs at ``LAW_COUNT`` beside its exact method, named ``parameter=value``
-as ``method``: their cost beside plain DLA's at the same N (issue 72)."""
+as ``method``: their cost beside plain DLA's at the same N."""
 LAW_COUNT = 1_000_000
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000
