@@ -252,7 +252,8 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         if first > 0 and not fit.ok:
             fit = Fit(*[getattr(fit, name) for name in ("D", "stderr", "ci_lo", "ci_hi", "range_lo", "range_hi",
                                                         "npoints", "drift", "ok")],
-                      reason=f"{fit.reason} (the counts resolve sides from {sides[first]:.3g} up)")
+                      reason=f"{fit.reason} (the counts resolve "
+                             + (f"sides from {sides[first]:.3g} up)" if first < len(sides) else "no side)"))
         fits.append(fit)
         reasons.append(fit.reason)
         if not np.isfinite(fit.D):
