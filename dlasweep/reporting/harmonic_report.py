@@ -41,10 +41,10 @@ def _raw_mean(sweep, config) -> np.ndarray:
 def spectrum_figure(sweep, path):
     """D(q) against q, each configuration's mean over seeds with its 95% interval; None without the measurement."""
     spectra = _spectra(sweep)
-    if not spectra or not any(np.isfinite(s.mean).any() for _, s in spectra):
+    raw = [_raw_mean(sweep, config) for config, _ in spectra]
+    if not any(np.isfinite(r).any() for r in raw):
         return None
     fig, (ax,) = new_figure(1, 6.5, 4.4)
-    raw = [_raw_mean(sweep, config) for config, _ in spectra]
     shift = 0.04
     for i, (config, s) in enumerate(spectra):
         x = s.q + shift * (i - (len(spectra) - 1) / 2)
