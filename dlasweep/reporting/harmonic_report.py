@@ -2,7 +2,10 @@
 report.md on it (``stats.multifractal.seed_spectrum``'s numbers, drawn; nothing else computed here).
 
 Present only for a sweep with ``[measure] harmonic_walkers``. In 2D the figure marks Makarov's D(1) = 1 and
-Halsey's D(3) = D(0)/2, and the text says whether each holds within the intervals.
+Halsey's D(3) = D(0)/2, and the text says whether each holds within the intervals. Halsey's D(0) is the
+dimension of the measure's support, the cluster: the report's headline D (mass-radius, ensemble) with its
+interval, not the harmonic D(0), whose box sums a finite number of walkers cannot resolve (the fjords they
+never reach count in D(0) as much as the tips).
 """
 
 from __future__ import annotations
@@ -55,10 +58,10 @@ def spectrum_figure(sweep, path):
         untrusted = ~np.isfinite(s.mean) & np.isfinite(raw[i])
         ax.scatter(x[untrusted], raw[i][untrusted], s=18, facecolors="none", edgecolors=colour_of(i),
                    label="no seed's fit trusted: mean of the untrusted fits" if i == 0 and untrusted.any() else None)
-        if sweep.dim == 2 and np.isfinite(s.mean[s.at(0.0)]):
-            half = s.mean[s.at(0.0)] / 2
+        half = sweep.row(config, len(sweep.counts) - 1)["D"] / 2
+        if sweep.dim == 2 and np.isfinite(half):
             ax.plot([2.6, 3.4], [half, half], color=colour_of(i), ls="--", lw=1.2,
-                    label="Halsey: D(3) = D(0)/2" if i == 0 else None)
+                    label="Halsey: D(3) = D(0)/2, D(0) the headline D" if i == 0 else None)
     if sweep.dim == 2:
         ax.plot([0.6, 1.4], [1.0, 1.0], color="k", ls=":", lw=1.5, label="Makarov: D(1) = 1")
         for q in (1.0, 3.0):
@@ -72,7 +75,8 @@ def spectrum_figure(sweep, path):
             f"the walkers fired at each cluster at its largest count, mean over the seeds whose fit is trusted with "
             f"its {LEVEL} CI (no bar: fewer than {MIN_CI_SEEDS} trusted seeds; hollow: no seed's fit is trusted, the "
             f"mean of the untrusted fits, not to be quoted)"
-            + ("; dotted, Makarov's D(1) = 1; dashed, Halsey's D(3) = D(0)/2 from each configuration's trusted D(0), when it has one."
+            + ("; dotted, Makarov's D(1) = 1; dashed, Halsey's D(3) = D(0)/2 with D(0) the configuration's headline D (mass-radius, ensemble), the "
+               "dimension of the measure's support."
                if sweep.dim == 2 else "."))
 
 
@@ -113,11 +117,14 @@ def harmonic_lines(sweep) -> list:
         if sweep.dim == 2:
             k = s.at(1.0)
             line += f". Makarov (D(1) = 1) {_holds(s.ci_lo[k], s.ci_hi[k], 1.0)}"
-            h = s.halsey
-            if np.isfinite(h.ci_lo):
-                line += (f"; Halsey (D(3) = D(0)/2): D(3) - D(0)/2 = {h.mean:.3f} [{h.ci_lo:.3f}, {h.ci_hi:.3f}] "
-                         f"over {h.n} seeds, {_holds(h.ci_lo, h.ci_hi, 0.0)}")
+            row, k = sweep.row(config, len(sweep.counts) - 1), s.at(3.0)
+            # the two intervals' half-widths in quadrature: D(3) and D(0)/2 come from independent estimates
+            diff = s.mean[k] - row["D"] / 2
+            half = np.hypot(s.ci_hi[k] - s.mean[k], (row["D_ci_hi"] - row["D"]) / 2)
+            if np.isfinite(half):
+                line += (f"; Halsey (D(3) = D(0)/2, D(0) = the headline D {row['D']:.3f}): D(3) - D(0)/2 = "
+                         f"{diff:.3f} [{diff - half:.3f}, {diff + half:.3f}], {_holds(diff - half, diff + half, 0.0)}")
             else:
-                line += "; Halsey (D(3) = D(0)/2) cannot be judged (too few seeds trust both D(0) and D(3))"
+                line += "; Halsey (D(3) = D(0)/2) cannot be judged (no interval of D(3) or of the headline D)"
         lines.append(line + ".")
     return [*lines, ""]

@@ -289,7 +289,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
 
 @dataclass(frozen=True)
 class SeedSpectrum:
-    """D(q) of a configuration over its seeds, and the exact 2D relations checked on it.
+    """D(q) of a configuration over its seeds.
 
     Attributes
     ----------
@@ -300,8 +300,6 @@ class SeedSpectrum:
         ``fit.ensemble``; NaN below ``MIN_CI_SEEDS`` trusted values).
     n : ndarray of int
         Seeds whose D(q) is trusted, for each q.
-    halsey : Ensemble
-        D(3) - D(0)/2 over the seeds where both are trusted (Halsey's relation: 0 in 2D).
     """
 
     q: np.ndarray
@@ -309,7 +307,6 @@ class SeedSpectrum:
     ci_lo: np.ndarray
     ci_hi: np.ndarray
     n: np.ndarray
-    halsey: object
 
     def at(self, q: float) -> int:
         """The index of moment ``q``."""
@@ -351,10 +348,4 @@ def seed_spectrum(q, D, ok) -> SeedSpectrum:
     few = np.array([s.n < MIN_CI_SEEDS for s in stats])
     lo = np.where(few, np.nan, [s.ci_lo for s in stats])
     hi = np.where(few, np.nan, [s.ci_hi for s in stats])
-    halsey = ensemble([np.nan])
-    zero, three = np.flatnonzero(np.isclose(q, 0.0)), np.flatnonzero(np.isclose(q, 3.0))
-    if len(zero) and len(three):
-        halsey = ensemble(trusted[:, three[0]] - trusted[:, zero[0]] / 2)
-        if halsey.n < MIN_CI_SEEDS:
-            halsey = ensemble([np.nan])
-    return SeedSpectrum(q, np.array([s.mean for s in stats]), lo, hi, np.array([s.n for s in stats]), halsey)
+    return SeedSpectrum(q, np.array([s.mean for s in stats]), lo, hi, np.array([s.n for s in stats]))
