@@ -75,8 +75,8 @@ def spectrum_figure(sweep, path):
             f"the walkers fired at each cluster at its largest count, mean over the seeds whose fit is trusted with "
             f"its {LEVEL} CI (no bar: fewer than {MIN_CI_SEEDS} trusted seeds; hollow: no seed's fit is trusted, the "
             f"mean of the untrusted fits, not to be quoted)"
-            + ("; dotted, Makarov's D(1) = 1; dashed, Halsey's D(3) = D(0)/2 with D(0) the configuration's headline D (mass-radius, ensemble), the "
-               "dimension of the measure's support."
+            + ("; dotted, Makarov's D(1) = 1; dashed, Halsey's D(3) = D(0)/2 with D(0) the configuration's "
+               "headline D (mass-radius, ensemble), the dimension of the measure's support."
                if sweep.dim == 2 else "."))
 
 
