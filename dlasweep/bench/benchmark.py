@@ -221,14 +221,36 @@ HARMONIC_COUNTS = {"quick": (QUICK_COUNT, 10_000), "default": (100_000, 100_000)
 """(cluster size, walkers) of the harmonic-measure row: a small frozen cluster in the quick bench, 1e5 by
 default, 1e6 under ``--full`` (issue 73's figure: walkers per second against a frozen cluster of 1e6)."""
 
+_HARMONIC_PROBE = """
+import json, sys, time
+import dlasweep as dla
+
+params = json.loads(sys.argv[1]); n = int(sys.argv[2]); walkers = int(sys.argv[3]); seed = int(sys.argv[4])
+dla.harmonic_measure(dla.grow(50, seed=0, **params), 100, seed=0)  # load the compiled kernels
+t = time.perf_counter(); c = dla.grow(n, seed=seed, **params); grown = time.perf_counter() - t
+h = dla.harmonic_measure(c, walkers, seed=seed)
+print(json.dumps(dict(n_grown=c.n, growth_seconds=grown, walkers=h.walkers, seconds=h.seconds, status=h.status)))
+"""
+
+
+def harmonic_probe(params: dict, n: int, walkers: int, seed: int = 1) -> dict:
+    """Grow one cluster of ``n`` with ``params`` from ``seed`` and fire ``walkers`` at it, in a fresh interpreter.
+
+    Returns the particles grown and the growth's seconds, and the walkers that stuck and their seconds
+    (``HarmonicMeasure.seconds``), compilation excluded (a small cluster is grown and measured first), as
+    ``probe`` does for growth alone.
+    """
+    out = subprocess.run([sys.executable, "-c", _HARMONIC_PROBE, json.dumps(params), str(n), str(walkers), str(seed)],
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
 
 def harmonic_bench(full: bool = False, quick: bool = False, echo=print, grown=None) -> dict:
     """Walkers per second of ``harmonic_measure`` against a frozen 2D off-lattice cluster, beside its growth.
 
-    The cluster (``HARMONIC_COUNTS``) grows from seed 1, as ``probe``'s do; the walkers are timed by the
-    measurement itself (``HarmonicMeasure.seconds``), compilation excluded by a measurement of a small
-    cluster first. The growth's particles per second at the same N is the median run's in ``grown`` (the
-    bench's runs by (model, method, N)) when the bench grew that N, else this cluster's own growth.
+    The cluster (``HARMONIC_COUNTS``) grows from seed 1, as ``probe``'s do, and the walkers are fired at
+    it (``harmonic_probe``). The growth's particles per second at the same N is the median run's in
+    ``grown`` (the bench's runs by (model, method, N)) when the bench grew that N, else this cluster's own.
 
     Parameters
     ----------
@@ -245,25 +267,18 @@ def harmonic_bench(full: bool = False, quick: bool = False, echo=print, grown=No
         The dataset's attributes: ``harmonic_cluster``, ``harmonic_walkers``, ``harmonic_seconds``,
         ``harmonic_walkers_per_second`` and ``harmonic_growth_particles_per_second``.
     """
-    import time
-
-    import dlasweep as dla
-
     n, walkers = HARMONIC_COUNTS["full" if full else "quick" if quick else "default"]
-    params = MODELS["offlattice-2d"]
-    dla.harmonic_measure(dla.grow(50, seed=0, **params), 100, seed=0)  # load the compiled kernels
-    start = time.perf_counter()
-    cluster = dla.grow(n, seed=1, **params)
-    growth = cluster.n / (time.perf_counter() - start)
+    run = harmonic_probe(MODELS["offlattice-2d"], n, walkers)
+    growth = run["n_grown"] / run["growth_seconds"]
     runs = (grown or {}).get(("offlattice-2d", "exact", n))
     if runs:
         median = _median_run(runs)
         growth = median["n_grown"] / median["seconds"]
-    measure = dla.harmonic_measure(cluster, walkers, seed=1)
-    rate = measure.walkers / measure.seconds
-    echo(f"offlattice-2d harmonic measure: {walkers:,} walkers against a frozen cluster of {cluster.n:,} in "
-         f"{measure.seconds:.2f} s: {rate:,.0f} walkers/s (its growth: {growth:,.0f} particles/s)")
-    return {"harmonic_cluster": cluster.n, "harmonic_walkers": measure.walkers, "harmonic_seconds": measure.seconds,
+    rate = run["walkers"] / run["seconds"]
+    echo(f"offlattice-2d harmonic measure: {run['walkers']:,} walkers against a frozen cluster of "
+         f"{run['n_grown']:,} in {run['seconds']:.2f} s: {rate:,.0f} walkers/s (its growth: {growth:,.0f} "
+         "particles/s)")
+    return {"harmonic_cluster": run["n_grown"], "harmonic_walkers": run["walkers"], "harmonic_seconds": run["seconds"],
             "harmonic_walkers_per_second": rate, "harmonic_growth_particles_per_second": growth}
 
 
