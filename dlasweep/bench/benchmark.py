@@ -237,7 +237,7 @@ def harmonic_probe(params: dict, n: int, walkers: int, seed: int = 1) -> dict:
     """Grow one cluster of ``n`` with ``params`` from ``seed`` and fire ``walkers`` at it, in a fresh interpreter.
 
     Returns the particles grown and the growth's seconds, and the walkers that stuck and their seconds
-    (``HarmonicMeasure.seconds``), compilation excluded (a small cluster is grown and measured first), as
+    (``HarmonicMeasure.seconds``), compilation excluded (a small cluster is grown and its walkers fired first), as
     ``probe`` does for growth alone.
     """
     out = subprocess.run([sys.executable, "-c", _HARMONIC_PROBE, json.dumps(params), str(n), str(walkers), str(seed)],
