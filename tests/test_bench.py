@@ -152,6 +152,7 @@ def test_a_full_bench_runs_the_first_scaling_n_again_after_the_long_runs(monkeyp
 
     monkeypatch.setattr(bench, "probe", fake_probe)
     monkeypatch.setattr(bench, "read_latency", lambda reads: {1.0: 10.0})  # its own test: tests/test_host.py
+    monkeypatch.setattr(bench, "harmonic_probe", fake_harmonic_probe)
     lines = []
     ds = bench.run_bench(full=True, echo=lines.append)
     lo, hi = bench_targets.SCALING
@@ -268,3 +269,38 @@ def test_shortfall_never_reads_over_by_nothing(seconds, target, said):
     from dlasweep.bench.benchmark import shortfall
 
     assert shortfall(seconds, target) == said
+
+
+def fake_harmonic_probe(params, n, walkers, seed=1):
+    return {"n_grown": n, "growth_seconds": 1e-5 * n, "walkers": walkers, "seconds": 2e-5 * walkers, "status": "ok"}
+
+
+@pytest.mark.parametrize("mode", ["quick", "default", "full"])
+def test_the_harmonic_row_times_walkers_against_a_frozen_2d_offlattice_cluster(mode, monkeypatch):
+    from dlasweep.bench import benchmark as bench
+
+    asked = []
+
+    def probe(params, n, walkers, seed=1):
+        asked.append((params["model"], params["dim"], n, walkers))
+        return fake_harmonic_probe(params, n, walkers, seed)
+
+    monkeypatch.setattr(bench, "harmonic_probe", probe)
+    lines = []
+    attrs = bench.harmonic_bench(full=mode == "full", quick=mode == "quick", echo=lines.append)
+    n, walkers = bench.HARMONIC_COUNTS[mode]
+    assert asked == [("offlattice", 2, n, walkers)]
+    assert attrs["harmonic_walkers_per_second"] == pytest.approx(1 / 2e-5)
+    assert attrs["harmonic_growth_particles_per_second"] == pytest.approx(1 / 1e-5)
+    assert len(lines) == 1 and "walkers/s" in lines[0]
+    # the growth's rate is the bench's own median run of that N when it grew one
+    grown = {("offlattice-2d", "exact", n): [{"seconds": 1e-6 * n, "n_grown": n}]}
+    assert bench.harmonic_bench(full=mode == "full", quick=mode == "quick", echo=lines.append,
+                                grown=grown)["harmonic_growth_particles_per_second"] == pytest.approx(1e6)
+
+
+def test_the_harmonic_row_runs_for_a_real_small_cluster():
+    from dlasweep.bench import benchmark as bench
+
+    run = bench.harmonic_probe(bench.MODELS["offlattice-2d"], 300, 1000)
+    assert run["n_grown"] == 300 and run["walkers"] == 1000 and run["seconds"] > 0 and run["status"] == "ok"

@@ -206,6 +206,8 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         ratio = t["naive"] / t["exact"]
         ds.attrs[f"naive_over_exact_{n}"] = ratio
         echo(f"lattice-2d N={n}: naive walk takes {ratio:.1f}x the time of the exact-jump kernel")
+    if "offlattice-2d" in models:
+        ds.attrs.update(harmonic_bench(full=full, quick=quick, echo=echo, grown=runs))
     latency = read_latency(reads=READS // 10 if quick else READS)  # after the runs, on the same quiet host
     ds.attrs.update(host_read_mib=list(latency), host_read_ns=list(latency.values()))
     echo(latency_line(latency))
@@ -213,6 +215,71 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         for line in target_table(ds):
             echo(line)
     return ds
+
+
+HARMONIC_COUNTS = {"quick": (QUICK_COUNT, 10_000), "default": (100_000, 100_000), "full": (1_000_000, 1_000_000)}
+"""(cluster size, walkers) of the harmonic-measure row: a small frozen cluster in the quick bench, 1e5 by
+default, 1e6 under ``--full`` (issue 73's figure: walkers per second against a frozen cluster of 1e6)."""
+
+_HARMONIC_PROBE = """
+import json, sys, time
+import dlasweep as dla
+
+params = json.loads(sys.argv[1]); n = int(sys.argv[2]); walkers = int(sys.argv[3]); seed = int(sys.argv[4])
+dla.harmonic_measure(dla.grow(50, seed=0, **params), 100, seed=0)  # load the compiled kernels
+t = time.perf_counter(); c = dla.grow(n, seed=seed, **params); grown = time.perf_counter() - t
+h = dla.harmonic_measure(c, walkers, seed=seed)
+print(json.dumps(dict(n_grown=c.n, growth_seconds=grown, walkers=h.walkers, seconds=h.seconds, status=h.status)))
+"""
+
+
+def harmonic_probe(params: dict, n: int, walkers: int, seed: int = 1) -> dict:
+    """Grow one cluster of ``n`` with ``params`` from ``seed`` and fire ``walkers`` at it, in a fresh interpreter.
+
+    Returns the particles grown and the growth's seconds, and the walkers that stuck and their seconds
+    (``HarmonicMeasure.seconds``), compilation excluded (a small cluster is grown and its walkers fired first), as
+    ``probe`` does for growth alone.
+    """
+    out = subprocess.run([sys.executable, "-c", _HARMONIC_PROBE, json.dumps(params), str(n), str(walkers), str(seed)],
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def harmonic_bench(full: bool = False, quick: bool = False, echo=print, grown=None) -> dict:
+    """Walkers per second of ``harmonic_measure`` against a frozen 2D off-lattice cluster, beside its growth.
+
+    The cluster (``HARMONIC_COUNTS``) grows from seed 1, as ``probe``'s do, and the walkers are fired at
+    it (``harmonic_probe``). The growth's particles per second at the same N is the median run's in
+    ``grown`` (the bench's runs by (model, method, N)) when the bench grew that N, else this cluster's own.
+
+    Parameters
+    ----------
+    full, quick : bool
+        Which size (``HARMONIC_COUNTS``).
+    echo : callable
+        Receives the one line of the row.
+    grown : dict, optional
+        The bench's runs, by (model, method, N).
+
+    Returns
+    -------
+    dict
+        The dataset's attributes: ``harmonic_cluster``, ``harmonic_walkers``, ``harmonic_seconds``,
+        ``harmonic_walkers_per_second`` and ``harmonic_growth_particles_per_second``.
+    """
+    n, walkers = HARMONIC_COUNTS["full" if full else "quick" if quick else "default"]
+    run = harmonic_probe(MODELS["offlattice-2d"], n, walkers)
+    growth = run["n_grown"] / run["growth_seconds"]
+    runs = (grown or {}).get(("offlattice-2d", "exact", n))
+    if runs:
+        median = _median_run(runs)
+        growth = median["n_grown"] / median["seconds"]
+    rate = run["walkers"] / run["seconds"]
+    echo(f"offlattice-2d harmonic measure: {run['walkers']:,} walkers against a frozen cluster of "
+         f"{run['n_grown']:,} in {run['seconds']:.2f} s: {rate:,.0f} walkers/s (its growth: {growth:,.0f} "
+         "particles/s)")
+    return {"harmonic_cluster": run["n_grown"], "harmonic_walkers": run["walkers"], "harmonic_seconds": run["seconds"],
+            "harmonic_walkers_per_second": rate, "harmonic_growth_particles_per_second": growth}
 
 
 def _beside_the_host(params: dict, n: int) -> dict:

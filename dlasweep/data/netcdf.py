@@ -26,6 +26,8 @@ from .paths import writable
 from .schema import (
     AXES,
     BOOLEAN,
+    HARMONIC,
+    HARMONIC_Q,
     SCHEMA,
     SCIENCE,
     STATUS_FLAGS,
@@ -55,7 +57,9 @@ def to_dataset(spec, tasks, scales, history, science, cluster_particles, failed=
         ``radius_gyration_history`` on ``(<axes>..., size, seed, history)``,
         the other quantities (``SCIENCE`` and ``wall_time``) on
         ``(<axes>..., size, n_particles, seed)``. ``status`` holds integer
-        codes (index into ``STATUS_FLAGS``).
+        codes (index into ``STATUS_FLAGS``). With the harmonic measurement
+        (``HARMONIC``, ``[measure] harmonic_walkers``), its variables on
+        ``(<axes>..., size, seed[, q])``, and the coordinate ``q`` is added.
     cluster_particles : ndarray, (n_stored,)
         Particles per stored cluster (``spec.stores``), in task (C) order.
     failed : sequence of (str, str)
@@ -81,7 +85,10 @@ def to_dataset(spec, tasks, scales, history, science, cluster_particles, failed=
     coords["cluster_seed"] = ("cluster", np.asarray([t.seed for t in tasks], SCHEMA["cluster_seed"].dtype))
     coords["cluster"] = ("cluster", np.arange(len(tasks), dtype=SCHEMA["cluster"].dtype))
 
-    data = {name: (dims(name, tuple(spec.axes)), science[name]) for name in (*SCIENCE, "wall_time")}
+    harmonic = tuple(name for name in HARMONIC if name in science)
+    if harmonic:
+        coords["q"] = ("q", np.asarray(HARMONIC_Q, SCHEMA["q"].dtype))
+    data = {name: (dims(name, tuple(spec.axes)), science[name]) for name in (*SCIENCE, "wall_time", *harmonic)}
     data["cluster_particles"] = ("cluster", np.asarray(cluster_particles))
     attrs = {
         "title": f"dlasweep parameter sweep '{spec.name}': diffusion-limited aggregation clusters",

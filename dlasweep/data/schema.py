@@ -107,7 +107,14 @@ class Variable:
         return np.nan if np.dtype(self.dtype).kind == "f" else 0
 
 
+BOOLEAN = "false true"
+"""``flag_meanings`` of a boolean."""
+_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": BOOLEAN}
+"""The CF attributes of a boolean data variable stored as int8 0/1."""
+
 _SWEPT = (_CONFIG, "size", "n_particles", "seed")
+_MEASURED = (_CONFIG, "size", "seed")
+"""A measurement taken once per cluster, at its largest particle count (``[measure]`` of a spec)."""
 SCHEMA = {
     "box_count": Variable((*_SWEPT, "scale"), np.int64, "1", "number of boxes of side `scale` holding particles"),
     "n_grown": Variable(_SWEPT, np.int64, "1", "particles attached at this count (less when growth stopped early)"),
@@ -125,12 +132,29 @@ SCHEMA = {
     "D_ci_half_width": Variable((_CONFIG, "size"), np.float64, "1",
                                 f"half-width of the {LEVEL} bootstrap confidence interval over seeds of the headline "
                                 "(mass-radius) fractal dimension D at the largest particle count"),
+    # [measure] harmonic_walkers: the harmonic measure at the largest count (dlasweep.measures.harmonic)
+    "harmonic_D": Variable((*_MEASURED, "q"), np.float64, "1",
+                           "generalised dimension D(q) of the harmonic measure (the growth probability) of the "
+                           "cluster at its largest particle count, by box partition sums over the fitted window"),
+    "harmonic_D_stderr": Variable((*_MEASURED, "q"), np.float64, "1",
+                                  "standard error of harmonic_D: the fit's, the jackknife's over the walkers and "
+                                  "the finite sample's bias, in quadrature"),
+    "harmonic_D_ok": Variable((*_MEASURED, "q"), np.int8, "1",
+                              "whether harmonic_D is trusted: a flat fitted window of box sides the walkers resolve",
+                              _FLAG),
+    "harmonic_depth": Variable(_MEASURED, np.float64, "1",
+                               "deposition depth: mean distance from the origin (above a substrate: height) "
+                               "at which the walkers would stick, over the cluster's radius"),
+    "harmonic_depth_spread": Variable(_MEASURED, np.float64, "1",
+                                      "standard deviation over the walkers of the distance at which they would "
+                                      "stick, over the cluster's radius"),
     # coordinates
     "n_particles": Variable(("n_particles",), np.int64, "1", "target number of particles"),
     "seed": Variable(("seed",), np.int64, "1",
                      "replicate number (with root_seed and the grid indices it names the random stream)"),
     "scale": Variable(("scale",), np.float64, "1", f"box side for box counting, in {_LENGTH}"),
     "history": Variable(("history",), np.int64, "1", "particle count at which the growth history is recorded"),
+    "q": Variable(("q",), np.float64, "1", "moment q of the generalised dimensions D(q) of the harmonic measure"),
     # the clusters: a CF contiguous ragged array of trajectories (see CF in the module docstring)
     "cluster_particles": Variable(("cluster",), np.int32, "1", "number of particles of the cluster",
                                   {"sample_dimension": "particle"}),
@@ -156,6 +180,13 @@ are on ``cluster`` there."""
 SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "anisotropy", "walk_steps",
            "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
+
+HARMONIC = ("harmonic_D", "harmonic_D_stderr", "harmonic_D_ok", "harmonic_depth", "harmonic_depth_spread")
+"""Variables of the harmonic measurement (``[measure] harmonic_walkers``), present only when it is on; they too
+depend only on the spec, bit for bit."""
+HARMONIC_Q = np.arange(0.0, 6.01, 0.5)
+"""The ``q`` coordinate of a sweep's harmonic measurement: 0 to 6 by halves (``stats.multifractal.DEFAULT_Q``,
+spelled here because the schema imports no statistics)."""
 
 
 def blank(name, shape) -> np.ndarray:
@@ -205,10 +236,6 @@ def ragged_columns(models, dims) -> dict:
     lattice = bool((np.asarray(models) == "lattice").all())
     return {**{a: ragged_dtype(lattice) for a in AXES[:int(np.max(dims))]},
             **{name: np.dtype(SCHEMA[name].dtype) for name in ("diffusion_time", "parent")}}
-
-
-BOOLEAN = "false true"
-"""``flag_meanings`` of a boolean."""
 
 
 def attributes(name, dtype=None, schema=None) -> dict:

@@ -13,6 +13,7 @@ from ..params import EXACT_METHOD, text
 from ..stats.constants import LEVEL, MIN_CI_SEEDS
 from .branch_report import branching_figure
 from .figures import MAX_PANELS, colour_of, log_x, mark_missing, new_figure, save_figure
+from .harmonic_report import spectrum_figure
 from .pictures import draw_points
 from .readout import bias, error_bars, fitted_line, fitted_scales, visible_scales
 
@@ -451,5 +452,6 @@ PLOTS = {
     "speed_accuracy": _speed_accuracy,
     "failure": _failure,
     "branching": branching_figure,
+    "harmonic_spectrum": spectrum_figure,
 }
 """Every plot: name -> function(sweep, path) returning a caption, or None when skipped."""

@@ -15,6 +15,7 @@ from ..params import EXACT_METHOD, text
 from ..stats.constants import LEVEL, MIN_CI_SEEDS, MIN_DECADES, START_FRACTION
 from .branch_report import branching_lines
 from .figures import MAX_PANELS
+from .harmonic_report import harmonic_lines
 from .readout import REFERENCE_D, resolved
 
 
@@ -223,6 +224,7 @@ def write_report(sweep, figures, path) -> Path:
         *(["## Between configurations", "", *differences] if differences else []),
         *(["## Against the exact method", "", *deviations] if deviations else []),
         *branching_lines(sweep),
+        *harmonic_lines(sweep),
         "## Summary table",
         "",
         "(Also in `summary.csv` with every column; ⚠ marks a configuration where a cluster stopped early.)",

@@ -252,7 +252,8 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
         if first > 0 and not fit.ok:
             fit = Fit(*[getattr(fit, name) for name in ("D", "stderr", "ci_lo", "ci_hi", "range_lo", "range_hi",
                                                         "npoints", "drift", "ok")],
-                      reason=f"{fit.reason} (the counts resolve sides from {sides[first]:.3g} up)")
+                      reason=f"{fit.reason} (the counts resolve "
+                             + (f"sides from {sides[first]:.3g} up)" if first < len(sides) else "no side)"))
         fits.append(fit)
         reasons.append(fit.reason)
         if not np.isfinite(fit.D):
@@ -284,3 +285,67 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
     D, err = out["D"], out["err"]
     return Spectrum(q, D, err, D - Z95 * err, D + Z95 * err, out["alpha"], out["aerr"], out["f"], out["ferr"], ok,
                     tuple(reasons), out["lo"], out["hi"], tuple(fits), out["sampling"], out["bias"], total)
+
+
+@dataclass(frozen=True)
+class SeedSpectrum:
+    """D(q) of a configuration over its seeds.
+
+    Attributes
+    ----------
+    q : ndarray
+        The moments.
+    mean, ci_lo, ci_hi : ndarray
+        Mean over seeds of each q's trusted D(q) (``ok``) and its 95% confidence interval (Student's t,
+        ``fit.ensemble``; NaN below ``MIN_CI_SEEDS`` trusted values).
+    n : ndarray of int
+        Seeds whose D(q) is trusted, for each q.
+    """
+
+    q: np.ndarray
+    mean: np.ndarray
+    ci_lo: np.ndarray
+    ci_hi: np.ndarray
+    n: np.ndarray
+
+    def at(self, q: float) -> int:
+        """The index of moment ``q``."""
+        where = np.flatnonzero(np.isclose(self.q, q))
+        if not len(where):
+            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
+        return int(where[0])
+
+
+def seed_spectrum(q, D, ok) -> SeedSpectrum:
+    """D(q) over seeds: each q's trusted values (``ok``) averaged, with a 95% interval over seeds.
+
+    Only the trusted values count: an untrusted one is a fit whose window is
+    not flat or that the walkers do not resolve, whose error bar does not
+    hold. The seeds are independent clusters, so the interval over them
+    holds the spread of the clusters and of each one's sampling together.
+
+    Parameters
+    ----------
+    q : array_like (nq,)
+        The moments.
+    D : array_like (seeds, nq)
+        Each seed's D(q) (``harmonic_D`` of a sweep's configuration).
+    ok : array_like (seeds, nq) of bool
+        Whether each is trusted (``harmonic_D_ok``).
+
+    Returns
+    -------
+    SeedSpectrum
+    """
+    from .constants import MIN_CI_SEEDS
+    from .fit import ensemble
+
+    q = np.asarray(q, np.float64)
+    D = np.asarray(D, np.float64).reshape(-1, len(q))
+    ok = np.asarray(ok, bool).reshape(D.shape) & np.isfinite(D)
+    trusted = np.where(ok, D, np.nan)
+    stats = [ensemble(trusted[:, k]) for k in range(len(q))]
+    few = np.array([s.n < MIN_CI_SEEDS for s in stats])
+    lo = np.where(few, np.nan, [s.ci_lo for s in stats])
+    hi = np.where(few, np.nan, [s.ci_hi for s in stats])
+    return SeedSpectrum(q, np.array([s.mean for s in stats]), lo, hi, np.array([s.n for s in stats]))

@@ -102,9 +102,9 @@ def plan(spec: Spec, threads: int) -> Plan:
 def _measure_bytes(spec) -> int:
     """Bytes of one cluster's measures (``schema.SCHEMA``'s per-task variables, at their stored types)."""
     lengths = {"n_particles": len(spec.counts), "history": len(growth_counts(spec.counts)),
-               "scale": len(sweep_scales(spec))}
+               "scale": len(sweep_scales(spec)), "q": len(schema.HARMONIC_Q)}
     total = 0
-    for name in (*schema.SCIENCE, "wall_time"):
+    for name in (*schema.SCIENCE, "wall_time", *(schema.HARMONIC if spec.harmonic_walkers else ())):
         var = schema.SCHEMA[name]
         total += np.dtype(var.dtype).itemsize * math.prod(lengths.get(dim, 1) for dim in var.dims)
     return total

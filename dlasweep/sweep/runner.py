@@ -220,7 +220,7 @@ def _compute(client, spec, todo, parts, bar, stream=None):
 
     def submit(batch):
         future = client.submit(measure_tasks, batch, counts, scales, spec.root_seed, list(map(spec.stores, batch)),
-                               key=f"{batch[0].key}+{len(batch)}-{tag}", pure=False)
+                               spec.harmonic_walkers, key=f"{batch[0].key}+{len(batch)}-{tag}", pure=False)
         batch_of[future.key] = batch
         return future
 
@@ -233,7 +233,8 @@ def _compute(client, spec, todo, parts, bar, stream=None):
             # was cancelled. Not the status: a result gathered before its worker died reads "lost" (dask
             # computes it again for this future), yet the results in hand are whole.
             message = f"{type(results[1]).__name__}: {results[1]}" if isinstance(results, tuple) else "task cancelled"
-            results = [error_result(counts, len(scales), task.params["dim"], message) for task in batch]
+            results = [error_result(counts, len(scales), task.params["dim"], message, spec.harmonic_walkers)
+                       for task in batch]
         finished = {task.key: result for task, result in zip(batch, results)}
         parts.write(finished)
         if stream is not None:
@@ -251,13 +252,16 @@ def _assemble(spec, tasks, parts):
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
     science = {name: schema.blank(name, shapes.get(name, grid)) for name in (*schema.SCIENCE, "wall_time")}
+    if spec.harmonic_walkers:  # once per cluster: on (<axes>..., size, seed[, q])
+        science.update({name: schema.blank(name, (*spec.shape, len(schema.HARMONIC_Q))[:len(schema.dims(name, ()))])
+                        for name in schema.HARMONIC})
     table = parts.table((t.key for t in tasks), (*science, "points.shape", "error"))
     for name, values in science.items():
-        # The tasks are the grid's points in C order; but for the history, a
-        # task's values run along n_particles, which comes before seed.
+        # The tasks are the grid's points in C order; but for the history and the harmonic measurement, a
+        # task's values do not run along n_particles, which comes before seed.
         each = table[name].reshape(*spec.shape, *table[name].shape[1:])
-        values[...] = each if name == "radius_gyration_history" else np.moveaxis(each, len(spec.shape) - 1,
-                                                                                   len(spec.shape))
+        once = name == "radius_gyration_history" or name in schema.HARMONIC
+        values[...] = each if once else np.moveaxis(each, len(spec.shape) - 1, len(spec.shape))
     stores = [spec.stores(task) for task in tasks]
     sizes = [int(shape[0]) for shape in itertools.compress(table["points.shape"], stores)]
     failed = [(task.key, str(error)) for task, error in zip(tasks, table["error"]) if str(error)]

@@ -35,10 +35,13 @@ the plan (``plan``) weighs memory and disk, and listing this many takes hours (d
 MAX_WORKERS = 1024
 """Most threads of the embedded cluster (``[run] workers``, ``--workers``)."""
 
-_SECTIONS = ("grid", "model", "run")
+_SECTIONS = ("grid", "model", "run", "measure")
 _TOP_KEYS = ("name",)
 _GRID_KEYS = ("size", "n_particles", "seeds")
 _RUN_KEYS = ("root_seed", "workers", "target_ci", "max_seeds", "store_clusters")
+_MEASURE_KEYS = ("harmonic_walkers",)
+MAX_WALKERS = 1_000_000_000
+"""Most walkers a spec may fire at each cluster (``[measure] harmonic_walkers``; a guard against typos)."""
 
 DEFAULT_MAX_SEEDS = 256
 """Seed cap of a target sweep that names none (``[run] max_seeds``)."""
@@ -113,6 +116,9 @@ class Spec:
         ``[run] store_clusters``: positions are stored for the first this
         many seeds of each configuration (0: "none"); None ("all", the
         default) stores every cluster. Curves are computed for all.
+    harmonic_walkers : int
+        ``[measure] harmonic_walkers``: walkers fired at each cluster at its largest count for its
+        harmonic measure and spectrum D(q) (``measures.harmonic``); 0 (the default): none.
     """
 
     name: str
@@ -127,6 +133,7 @@ class Spec:
     target_ci: float | None = None
     max_seeds: int | None = None
     store_clusters: int | None = None
+    harmonic_walkers: int = 0
 
     @property
     def shape(self) -> tuple:
@@ -183,8 +190,12 @@ class Spec:
         the package version: a release that grows the same clusters into the
         same parts keeps the format, so its patch releases resume each
         other's parts, and one that changes either changes the format.
+        ``measure.harmonic_walkers`` is in when on: its results are part of each task's (left out when
+        off, so that the parts of a spec without it keep their identity).
         """
         stored = {} if self.store_clusters is None else {"run.store_clusters": self.store_clusters}
+        if self.harmonic_walkers:
+            stored["measure.harmonic_walkers"] = self.harmonic_walkers
         return {
             "grid.size": list(self.sizes),
             "grid.n_particles": list(self.counts),
@@ -257,9 +268,10 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
     for section in _SECTIONS:
         if not isinstance(doc.get(section, {}), dict):
             raise SpecError(f"{section}: expected a [{section}] table")
-    grid, model, run = (doc.get(s, {}) for s in _SECTIONS)
+    grid, model, run, measure = (doc.get(s, {}) for s in _SECTIONS)
     _reject_unknown("grid.", grid, _GRID_KEYS)
     _reject_unknown("run.", run, _RUN_KEYS)
+    _reject_unknown("measure.", measure, _MEASURE_KEYS)
     name = doc.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
         raise SpecError(f"name: expected a non-empty string, got {name!r}")
@@ -295,9 +307,10 @@ def parse_spec(text: str, default_name: str = "sweep") -> Spec:
         workers = _integer("run.workers", workers, 1, MAX_WORKERS)
     target_ci, max_seeds = _precision(grid, run, len(seeds))
     store_clusters = _store_clusters(run.get("store_clusters", "all"))
+    harmonic_walkers = _integer("measure.harmonic_walkers", measure.get("harmonic_walkers", 0), 0, MAX_WALKERS)
 
     spec = Spec(name.strip(), tuple(sizes), tuple(counts), tuple(seeds), fixed, axes,
-                root_seed, workers, text, target_ci, max_seeds, store_clusters)
+                root_seed, workers, text, target_ci, max_seeds, store_clusters, harmonic_walkers)
     _check_tasks(spec)
     _check_grid(spec)
     return spec

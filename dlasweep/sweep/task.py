@@ -17,8 +17,11 @@ from ..data import schema
 from ..growth.cluster import grow, grow_many
 from ..measures import shape
 from ..measures.boxes import default_scales
+from ..measures.harmonic import KEY as HARMONIC_KEY
+from ..measures.harmonic import harmonic_measure
 from ..params import Status, one_line
 from ..stats.fit import growth_counts
+from ..stats.multifractal import multifractal_spectrum
 from .spec import Spec
 
 
@@ -32,10 +35,11 @@ def sweep_scales(spec: Spec) -> np.ndarray:
     return default_scales(max(size or spec.counts[-1] for size in spec.sizes) + 2)
 
 
-def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
+def measure_tasks(tasks, counts, scales, root_seed, stored, walkers=0) -> list:
     """``measure_task`` for each of a batch of tasks; runs on a worker as one dask task.
 
-    ``stored``: per task, whether its positions are kept (``Spec.stores``).
+    ``stored``: per task, whether its positions are kept (``Spec.stores``);
+    ``walkers``: those fired at each cluster for its harmonic measure (``Spec.harmonic_walkers``, 0: none).
     Each run of tasks with the same parameters grows in one compiled call
     (``grow_many``); if that raises, each of its tasks grows alone, so that
     only the clusters that fail are marked failed.
@@ -49,18 +53,20 @@ def measure_tasks(tasks, counts, scales, root_seed, stored) -> list:
                                  **run[0][0].params)
         except Exception:  # noqa: BLE001 (each task then grows alone and records its own error)
             clusters = [None] * len(run)
-        results += [measure_task(task, counts, scales, root_seed, keep, history, cluster)
+        results += [measure_task(task, counts, scales, root_seed, keep, history, cluster, walkers)
                     for (task, keep), cluster in zip(run, clusters)]
     return results
 
 
-def measure_task(task, counts, scales, root_seed, stored, history, cluster=None) -> dict:
+def measure_task(task, counts, scales, root_seed, stored, history, cluster=None, walkers=0) -> dict:
     """Grow one cluster (unless ``cluster`` is the one grown) and measure every count; runs on a worker.
 
     Its Rg along the growth is kept at ``history`` (``growth_counts(counts)``,
     computed once per batch); its positions and diffusion times only when
-    ``stored`` (else empty). Never raises: a failure is returned as an
-    ``error`` result with its message.
+    ``stored`` (else empty). With ``walkers``, the harmonic measure of the
+    cluster as grown (its largest count) is sampled with that many walkers
+    (``harmonic``). Never raises: a failure is returned as an ``error``
+    result with its message.
     """
     try:
         if cluster is None:
@@ -70,6 +76,8 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
         prefix = np.minimum(counts, len(points))
         lattice = cluster.params["model"] == "lattice"
         measures = shape.cluster_measures(points, prefix, history, lattice=lattice, scales=scales)
+        if walkers:
+            measures.update(harmonic(cluster, walkers, harmonic_seed(root_seed, task)))
         return {
             **measures,
             "n_grown": prefix.astype(np.int64),
@@ -82,7 +90,28 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None)
             "error": np.array(""),
         }
     except Exception as err:
-        return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}")
+        return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}", walkers)
+
+
+def harmonic(cluster, walkers, seed) -> dict:
+    """The harmonic measurement of a grown cluster: ``walkers`` walkers fired at it from ``seed``
+    (``measures.harmonic.harmonic_measure``), its spectrum D(q) at ``schema.HARMONIC_Q`` with its
+    standard errors and ok flags (``stats.multifractal``, its jackknife drawn from the same seed), and the
+    deposition depth: the ``schema.HARMONIC`` variables of one task."""
+    measure = harmonic_measure(cluster, walkers, seed)
+    spectrum = multifractal_spectrum(measure, q=schema.HARMONIC_Q, seed=seed)
+    depth, spread = measure.depth
+    return {"harmonic_D": spectrum.D.astype(np.float64), "harmonic_D_stderr": spectrum.stderr.astype(np.float64),
+            "harmonic_D_ok": spectrum.ok.astype(np.int8), "harmonic_depth": np.float64(depth),
+            "harmonic_depth_spread": np.float64(spread)}
+
+
+def harmonic_seed(root_seed, task) -> int:
+    """The seed of a task's harmonic measurement: 63 bits drawn from ``SeedSequence(root_seed, spawn_key=(grid
+    indices..., harmonic.KEY))``, a child of the task's stream that its growth never draws (its children, if
+    any, are numbered from 0), so that the walkers are the same for the task in any batch or worker."""
+    state = np.random.SeedSequence(root_seed, spawn_key=(*task.spawn_key, HARMONIC_KEY)).generate_state(1, np.uint64)
+    return int(state[0] >> np.uint64(1))
 
 
 def _prefix_sums(steps, prefix) -> np.ndarray:
@@ -97,11 +126,15 @@ def _stream(root_seed, task) -> np.random.SeedSequence:
     return np.random.SeedSequence(root_seed, spawn_key=task.spawn_key)
 
 
-def error_result(counts, n_scales, dim, message) -> dict:
-    """The result recorded for a task that raised (or whose worker kept dying)."""
+def error_result(counts, n_scales, dim, message, walkers=0) -> dict:
+    """The result recorded for a task that raised (or whose worker kept dying); with ``walkers``, its
+    harmonic variables too, missing (so that every result of a sweep has the same variables)."""
     n_counts = len(counts)
     shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
     result = {name: schema.blank(name, shapes.get(name, n_counts)) for name in (*schema.SCIENCE, "wall_time")}
+    if walkers:
+        result.update({name: schema.blank(name, len(schema.HARMONIC_Q) if "q" in schema.SCHEMA[name].dims else ())
+                       for name in schema.HARMONIC})
     result["status"][:] = Status.error
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": schema.blank("diffusion_time", 0),
             "parent": schema.blank("parent", 0), "error": np.array(one_line(message))}

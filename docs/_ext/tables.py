@@ -35,7 +35,7 @@ LESSON_SEED = 1
 LESSON_OUTPUT = "lesson-output"
 """The lesson's output folder, in docs/_generated/ (where myst-nb runs it), emptied before each build."""
 
-# What each key of a spec's [grid] and [run] tables means (the [model] keys are the parameters, from their
+# What each key of a spec's [grid], [run] and [measure] tables means (the [model] keys are the parameters, from their
 # table). The build fails when the spec's key lists and these disagree, so a new key cannot go unwritten.
 SPEC_KEYS = {
     ("", "name"): ("the file's name without `.toml`", "The sweep's name, in the dataset's title and the report."),
@@ -54,6 +54,10 @@ SPEC_KEYS = {
     ("run", "store_clusters"): ("`\"all\"`", "Whose particle positions the file keeps: `\"all\"`, `\"none\"`, or "
                                              "an integer K, the first K seeds of each configuration. Every curve "
                                              "is measured for every cluster either way."),
+    ("measure", "harmonic_walkers"): ("0 (off)", "Walkers fired at each cluster at its largest count, moved as in "
+                                                 "growth but not attached: its harmonic measure, the spectrum D(q) "
+                                                 "and the deposition depth (the `harmonic_` variables; see "
+                                                 "{doc}`harmonic`)."),
 }
 
 
@@ -88,7 +92,7 @@ def spec_keys_md() -> str:
     spec = _module("dlasweep.sweep.spec", "dlasweep.spec")
     params = _module("dlasweep.growth.params", "dlasweep.params")
     keys = [("", k) for k in spec._TOP_KEYS] + [("grid", k) for k in spec._GRID_KEYS] + \
-        [("run", k) for k in spec._RUN_KEYS]
+        [("run", k) for k in spec._RUN_KEYS] + [("measure", k) for k in getattr(spec, "_MEASURE_KEYS", ())]
     missing = [k for k in keys if k not in SPEC_KEYS]
     stale = [k for k in SPEC_KEYS if k not in keys]
     if missing or stale:
