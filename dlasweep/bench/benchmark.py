@@ -219,7 +219,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
 
 HARMONIC_COUNTS = {"quick": (QUICK_COUNT, 10_000), "default": (100_000, 100_000), "full": (1_000_000, 1_000_000)}
 """(cluster size, walkers) of the harmonic-measure row: a small frozen cluster in the quick bench, 1e5 by
-default, 1e6 under ``--full`` (issue 73's figure: walkers per second against a frozen cluster of 1e6)."""
+default, 1e6 under ``--full`` (walkers per second against a frozen cluster of 1e6)."""
 
 _HARMONIC_PROBE = """
 import json, sys, time
