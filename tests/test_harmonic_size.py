@@ -105,6 +105,10 @@ def test_size_scaling_without_seeds_enough_gives_no_interval():
     assert none.seeds == 0 and np.isnan(none.D).all()
 
 
+def test_public():
+    assert dla.size_scaling is size_scaling and "size_scaling" in dir(dla)
+
+
 def test_a_prefix_is_the_cluster_it_was():
     c = dla.grow(500, seed=3, model="offlattice")
     p = c.prefix(200)
