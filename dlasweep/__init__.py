@@ -20,7 +20,8 @@ _LAZY = {"Cluster": "growth.cluster", "grow": "growth.cluster", "box_counts": "m
          "load_spec": "sweep.spec", "run_sweep": "sweep.runner", "open_sweep": "data.netcdf",
          "cluster_points": "data.ragged", "cluster_parents": "data.ragged", "read_cluster": "data.ragged",
          "export_cluster": "data.export", "summarise": "stats.summary", "report": "reporting.folder",
-         "harmonic_measure": "measures.harmonic", "multifractal_spectrum": "stats.multifractal"}
+         "harmonic_measure": "measures.harmonic", "multifractal_spectrum": "stats.multifractal",
+         "size_scaling": "stats.multifractal"}
 
 
 def _register_accessor():
@@ -93,6 +94,7 @@ __all__ = [
     "export_cluster",
     "harmonic_measure",
     "multifractal_spectrum",
+    "size_scaling",
     "report",
     "__version__",
 ]

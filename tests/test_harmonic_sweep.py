@@ -45,6 +45,7 @@ def test_the_measurement_round_trips_through_the_file_with_the_schemas_attribute
     ds = harmonic_sweep
     assert ds["harmonic_D"].dims == ("size", "seed", "q")
     assert ds["harmonic_depth"].dims == ("size", "seed")
+    assert ds["harmonic_entropy"].dims == ds["harmonic_entropy_half"].dims == ("size", "n_particles", "seed", "q")
     np.testing.assert_array_equal(ds["q"].values, schema.HARMONIC_Q)
     assert ds["harmonic_D_ok"].dtype == bool  # int8 flags in the file, bool when read
     for name in (*schema.HARMONIC, "q"):
@@ -54,11 +55,14 @@ def test_the_measurement_round_trips_through_the_file_with_the_schemas_attribute
     spec = parse_spec(HARMONIC_SPEC)
     for task in spec.tasks():
         cluster = grow(spec.counts[-1], worker._stream(spec.root_seed, task), **task.params)
-        direct = worker.harmonic(cluster, spec.harmonic_walkers, worker.harmonic_seed(spec.root_seed, task))
+        direct = worker.harmonic(cluster, spec.harmonic_walkers, worker.harmonic_seed(spec.root_seed, task),
+                                 spec.counts)
         where = {"size": 0, "seed": task.seed}
         np.testing.assert_array_equal(ds["harmonic_D"][where].values, direct["harmonic_D"])
         np.testing.assert_array_equal(ds["harmonic_D_ok"][where].values, direct["harmonic_D_ok"].astype(bool))
         assert ds["harmonic_depth"][where].item() == direct["harmonic_depth"]
+        for name in ("harmonic_entropy", "harmonic_entropy_half"):  # at every count, n_particles before seed
+            np.testing.assert_array_equal(ds[name][where].transpose("n_particles", "q").values, direct[name])
     assert np.isfinite(ds["harmonic_D"].values).any()
     assert 0 < np.nanmin(ds["harmonic_depth"].values) <= np.nanmax(ds["harmonic_depth"].values) <= 1
 
@@ -82,7 +86,8 @@ def test_the_report_draws_the_spectrum_and_writes_its_section(harmonic_sweep, tm
     assert tmp_path / "report" / "harmonic_spectrum.png" in written
     text = (tmp_path / "report" / "report.md").read_text()
     assert "## Harmonic measure" in text
-    assert "Makarov (D(1) = 1)" in text
+    assert "Makarov (D(1) = 1)" in text and "Halsey (2 D(3) = D)" in text
+    assert "by cluster size (N = 200 to 600, 3 seeds)" in text
 
 
 def test_the_report_of_a_sweep_without_it_has_no_spectrum(reference, tmp_path):

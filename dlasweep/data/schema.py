@@ -132,7 +132,8 @@ SCHEMA = {
     "D_ci_half_width": Variable((_CONFIG, "size"), np.float64, "1",
                                 f"half-width of the {LEVEL} bootstrap confidence interval over seeds of the headline "
                                 "(mass-radius) fractal dimension D at the largest particle count"),
-    # [measure] harmonic_walkers: the harmonic measure at the largest count (dlasweep.measures.harmonic)
+    # [measure] harmonic_walkers: the harmonic measure at every count, its box spectrum and deposition depth at
+    # the largest (dlasweep.measures.harmonic)
     "harmonic_D": Variable((*_MEASURED, "q"), np.float64, "1",
                            "generalised dimension D(q) of the harmonic measure (the growth probability) of the "
                            "cluster at its largest particle count, by box partition sums over the fitted window"),
@@ -142,6 +143,12 @@ SCHEMA = {
     "harmonic_D_ok": Variable((*_MEASURED, "q"), np.int8, "1",
                               "whether harmonic_D is trusted: a flat fitted window of box sides the walkers resolve",
                               _FLAG),
+    "harmonic_entropy": Variable((*_SWEPT, "q"), np.float64, "1",
+                                 "Renyi entropy of order q, log(sum_i p_i**q) / (1 - q) (Shannon's at q = 1), of the "
+                                 "harmonic measure sampled at the particles of the cluster at this count"),
+    "harmonic_entropy_half": Variable((*_SWEPT, "q"), np.float64, "1",
+                                      "harmonic_entropy of the first half of the walkers: with it, the finite sample's "
+                                      "bias, which halves as the walkers double"),
     "harmonic_depth": Variable(_MEASURED, np.float64, "1",
                                "deposition depth: mean distance from the origin (above a substrate: height) "
                                "at which the walkers would stick, over the cluster's radius"),
@@ -181,7 +188,8 @@ SCIENCE = ("box_count", "n_grown", "status", "radius_gyration", "max_radius", "a
            "radius_gyration_history")
 """Variables that depend only on the spec, bit for bit (``wall_time`` aside)."""
 
-HARMONIC = ("harmonic_D", "harmonic_D_stderr", "harmonic_D_ok", "harmonic_depth", "harmonic_depth_spread")
+HARMONIC = ("harmonic_D", "harmonic_D_stderr", "harmonic_D_ok", "harmonic_entropy", "harmonic_entropy_half",
+            "harmonic_depth", "harmonic_depth_spread")
 """Variables of the harmonic measurement (``[measure] harmonic_walkers``), present only when it is on; they too
 depend only on the spec, bit for bit."""
 HARMONIC_Q = np.arange(0.0, 6.01, 0.5)

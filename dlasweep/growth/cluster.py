@@ -6,7 +6,7 @@ import io
 import reprlib
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -78,6 +78,24 @@ class Cluster:
     def n(self) -> int:
         """Particles in the cluster (``len(points)``), the seed particles included."""
         return len(self.points)
+
+    def prefix(self, m: int) -> Cluster:
+        """The cluster as it was at ``m`` particles: its first ``m``, in attachment order (views, not copies).
+
+        Growth only adds particles, so the first m of a cluster are the cluster it was at m, with the
+        same model; its status and clock readings are the grown cluster's.
+
+        Parameters
+        ----------
+        m : int
+            Particles to keep, from the first.
+
+        Returns
+        -------
+        Cluster
+        """
+        parents = None if self.parents is None else self.parents[:m]
+        return replace(self, points=self.points[:m], steps=self.steps[:m], parents=parents)
 
     def _repr_png_(self) -> bytes:
         """The cluster's picture (``pictures.cluster_figure``) as PNG bytes: how Jupyter shows a ``Cluster``.

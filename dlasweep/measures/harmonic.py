@@ -88,6 +88,41 @@ class HarmonicMeasure:
         x = self.where / self.radius
         return float(x.mean()), float(x.std(ddof=1)) if len(x) > 1 else np.nan
 
+    def renyi_entropies(self, q, first=None) -> np.ndarray:
+        """The Renyi entropies of the sampled measure at the particles, one for each order in ``q``.
+
+        H_q = log(sum_i p_i**q) / (1 - q), Shannon's -sum_i p_i log p_i at q = 1, with p_i the share of
+        particle i in the walkers that stuck to a particle. They are taken at the particles, the
+        scale of the growth's own probabilities, because their growth with the cluster's size is what
+        the generalised dimensions of DLA's growth measure name: sum_i p_i**q ~ R**(-(q - 1) D(q)), so
+        that H_q grows as D(q) log R (``stats.multifractal.size_scaling``). Of the ``first`` walkers
+        only, the same sums show the finite sample's bias: it halves as the walkers double.
+
+        Parameters
+        ----------
+        q : array_like
+            The orders, q >= 0.
+        first : int, optional
+            Use only the first ``first`` walkers (``touched[:first]``); all of them when None.
+
+        Returns
+        -------
+        ndarray
+            H_q for each q; NaN when no walker stuck to a particle.
+        """
+        q = np.atleast_1d(np.asarray(q, np.float64))
+        touched = self.touched[:first]
+        counts = np.bincount(touched[touched >= 0], minlength=len(self.points))
+        counts = counts[counts > 0]
+        if not len(counts):
+            return np.full(len(q), np.nan)
+        p = counts / counts.sum()
+        logp = np.log(p)
+        one = np.isclose(q, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sums = np.log(np.exp(np.outer(np.where(one, 0.0, q), logp)).sum(axis=1))
+            return np.where(one, -(p * logp).sum(), sums / np.where(one, 1.0, 1.0 - q))
+
 
 def harmonic_measure(cluster, walkers: int, seed: int = 0) -> HarmonicMeasure:
     """Fire ``walkers`` walkers at the frozen ``cluster`` and count where each would stick.

@@ -349,3 +349,142 @@ def seed_spectrum(q, D, ok) -> SeedSpectrum:
     lo = np.where(few, np.nan, [s.ci_lo for s in stats])
     hi = np.where(few, np.nan, [s.ci_hi for s in stats])
     return SeedSpectrum(q, np.array([s.mean for s in stats]), lo, hi, np.array([s.n for s in stats]))
+
+
+@dataclass(frozen=True)
+class SizeScaling:
+    """D(q) of a configuration's harmonic measure from its growth with the cluster's size, between successive counts.
+
+    Attributes
+    ----------
+    q : ndarray (nq,)
+        The moments.
+    counts : ndarray (K,)
+        The particle counts; the slopes are between successive ones.
+    D, ci_lo, ci_hi : ndarray (K - 1, nq)
+        D(q): the change of the mean Renyi entropy H_q over the change of the log of the mean Rg,
+        with its 95% CI over seeds; each H_q corrected for the walkers' finite number
+        (``size_scaling``).
+    correction : ndarray (K - 1, nq)
+        The part of D(q) that correction makes: the slope of the entropies of all the walkers
+        minus those of the first half.
+    ok : ndarray (K - 1, nq) of bool
+        Whether D(q) is trusted: an interval, and a correction no larger than its half-width (the
+        correction removes the leading term of the bias, which must dominate what it leaves).
+    mass, mass_ci_lo, mass_ci_hi : ndarray (K - 1,)
+        The mass dimension between the same counts, the change of log N over that of the log of the
+        mean Rg, with its 95% CI over the same seeds.
+    halsey, halsey_ci_lo, halsey_ci_hi : ndarray (K - 1,)
+        2 D(3) - the mass dimension, with its 95% CI: Halsey's relation says 0. Both slopes come from the
+        same clusters, so the interval is of the paired difference. NaN without q = 3.
+    seeds : int
+        Seeds used: those with every count's values.
+    """
+
+    q: np.ndarray
+    counts: np.ndarray
+    D: np.ndarray
+    ci_lo: np.ndarray
+    ci_hi: np.ndarray
+    correction: np.ndarray
+    ok: np.ndarray
+    mass: np.ndarray
+    mass_ci_lo: np.ndarray
+    mass_ci_hi: np.ndarray
+    halsey: np.ndarray
+    halsey_ci_lo: np.ndarray
+    halsey_ci_hi: np.ndarray
+    seeds: int
+
+    def at(self, q: float) -> int:
+        """The index of moment ``q``."""
+        where = np.flatnonzero(np.isclose(self.q, q))
+        if not len(where):
+            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
+        return int(where[0])
+
+
+def size_scaling(q, counts, rg, entropy, half=None, *, resamples: int = 2000, seed: int = 0) -> SizeScaling:
+    """D(q) from how the harmonic measure's Renyi entropies grow with the cluster, and Halsey's check.
+
+    The growth probabilities p_i of a cluster's particles (``HarmonicMeasure.renyi_entropies``) have
+    sum_i p_i**q ~ R**(-(q - 1) D(q)) as the cluster grows: the Renyi entropy H_q grows as D(q) log R.
+    This is the scaling that Halsey's relation 2 D(3) = D (D the cluster's mass dimension) and
+    Makarov's D(1) = 1 are statements about, and it needs no box sides: the box partition sums of one
+    cluster (``multifractal_spectrum``) read the same exponents from how the measure is spread within
+    the cluster, over the few decades of sides a finite cluster offers, where the corrections to
+    scaling are others.
+
+    Between successive counts, D(q) is the change of the mean of H_q over seeds over the change of the
+    log of the mean Rg, as the headline D is a slope of the mean Rg; the mass dimension between the
+    same counts comes from the same seeds, so that Halsey's difference is paired. The intervals are
+    ``fit.seed_interval`` over a bootstrap of the seeds (``fit.bootstrap_means``).
+
+    A sample of M walkers biases each H_q by a term in 1/M (the unseen particles lower Shannon's
+    entropy by about (K - 1) / 2M, K the particles hit; the sums of p**q of counts are high by
+    about 1/M), and the bias grows with the cluster as K does, so that it tilts the slopes. With
+    ``half``, the entropies of the first half of the walkers, each H_q is taken as
+    2 H_q(M) - H_q(M/2) (Richardson's extrapolation in 1/M), which removes that term.
+
+    Parameters
+    ----------
+    q : array_like (nq,)
+        The moments.
+    counts : array_like (K,)
+        Particle counts, ascending, K >= 2.
+    rg : array_like (seeds, K)
+        Each seed's radius of gyration at each count.
+    entropy : array_like (seeds, K, nq)
+        Each seed's H_q at each count, of all its walkers.
+    half : array_like (seeds, K, nq), optional
+        The same of the first half of the walkers (``renyi_entropies(q, first=walkers // 2)``);
+        without it no correction is made and none is trusted.
+    resamples : int
+        Bootstrap draws of the seeds.
+    seed : int
+        The bootstrap's stream.
+
+    Returns
+    -------
+    SizeScaling
+    """
+    from .constants import MIN_CI_SEEDS
+    from .fit import bootstrap_means, seed_interval
+
+    q = np.atleast_1d(np.asarray(q, np.float64))
+    counts = np.asarray(counts, np.float64)
+    rg = np.asarray(rg, np.float64)
+    k, nq = len(counts), len(q)
+    entropy = np.asarray(entropy, np.float64).reshape(len(rg), k, nq)
+    correction = np.full_like(entropy, np.nan) if half is None else entropy - np.asarray(half, np.float64).reshape(
+        entropy.shape)
+    whole = np.isfinite(rg).all(axis=1) & np.isfinite(entropy).all(axis=(1, 2))
+    rg, entropy, correction = rg[whole], entropy[whole], correction[whole]
+    n = len(rg)
+    corrected = entropy + np.nan_to_num(correction)
+    # a row per seed: Rg (its mean's log is taken), the corrected entropies, their corrections
+    rows = np.concatenate([rg, corrected.reshape(n, k * nq), correction.reshape(n, k * nq)], axis=1)
+
+    def slopes(means):
+        means = np.atleast_2d(means)
+        dr = np.diff(np.log(means[:, :k]), axis=1)  # (draws, K - 1)
+        h = means[:, k:k * (1 + nq)].reshape(len(means), k, nq)
+        c = means[:, k * (1 + nq):].reshape(len(means), k, nq)
+        D = np.diff(h, axis=1) / dr[..., None]
+        mass = np.diff(np.log(counts))[None, :] / dr
+        three = np.isclose(q, 3.0)
+        halsey = 2 * D[..., np.argmax(three)] - mass if three.any() else np.full_like(mass, np.nan)
+        return D, np.diff(c, axis=1) / dr[..., None], mass, halsey
+
+    nan, untrusted = np.full((k - 1, nq), np.nan), np.zeros((k - 1, nq), bool)
+    line = nan[:, 0]
+    if n == 0:
+        return SizeScaling(q, counts, nan, nan, nan, nan, untrusted, line, line, line, line, line, line, 0)
+    D, shift, mass, halsey = (v[0] for v in slopes(rows.mean(axis=0)))
+    if n < MIN_CI_SEEDS:
+        return SizeScaling(q, counts, D, nan, nan, shift, untrusted, mass, line, line, halsey, line, line, n)
+    boot = slopes(bootstrap_means(rows, np.random.default_rng(seed), resamples))
+    (lo, hi), (mlo, mhi), (hlo, hhi) = (seed_interval(est, rep, n, axis=0)
+                                        for est, rep in ((D, boot[0]), (mass, boot[2]), (halsey, boot[3])))
+    ok = np.abs(shift) <= (hi - lo) / 2  # NaN (no correction) compares False
+    return SizeScaling(q, counts, D, lo, hi, shift, ok, mass, mlo, mhi, halsey, hlo, hhi, n)

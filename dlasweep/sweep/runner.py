@@ -252,15 +252,14 @@ def _assemble(spec, tasks, parts):
     grid = (*spec.shape[:-1], len(spec.counts), spec.shape[-1])
     shapes = {"box_count": (*grid, len(scales)), "radius_gyration_history": (*spec.shape, len(history))}
     science = {name: schema.blank(name, shapes.get(name, grid)) for name in (*schema.SCIENCE, "wall_time")}
-    if spec.harmonic_walkers:  # once per cluster: on (<axes>..., size, seed[, q])
-        science.update({name: schema.blank(name, (*spec.shape, len(schema.HARMONIC_Q))[:len(schema.dims(name, ()))])
-                        for name in schema.HARMONIC})
+    if spec.harmonic_walkers:  # on (<axes>..., size, [n_particles,] seed[, q])
+        science.update({name: schema.blank(name, _harmonic_shape(name, spec.shape, grid)) for name in schema.HARMONIC})
     table = parts.table((t.key for t in tasks), (*science, "points.shape", "error"))
     for name, values in science.items():
         # The tasks are the grid's points in C order; but for the history and the harmonic measurement, a
         # task's values do not run along n_particles, which comes before seed.
         each = table[name].reshape(*spec.shape, *table[name].shape[1:])
-        once = name == "radius_gyration_history" or name in schema.HARMONIC
+        once = name == "radius_gyration_history" or (name in schema.HARMONIC and not _at_every_count(name))
         values[...] = each if once else np.moveaxis(each, len(spec.shape) - 1, len(spec.shape))
     stores = [spec.stores(task) for task in tasks]
     sizes = [int(shape[0]) for shape in itertools.compress(table["points.shape"], stores)]
@@ -272,6 +271,19 @@ def _assemble(spec, tasks, parts):
     science["box_count"] = science["box_count"][..., : top + 1]
     stored = list(itertools.compress(tasks, stores))
     return netcdf.to_dataset(spec, stored, scales[: top + 1], history, science, sizes, failed), failed
+
+
+def _at_every_count(name) -> bool:
+    """Whether a harmonic variable is sampled at every count (on ``n_particles``), not once per cluster."""
+    return "n_particles" in schema.SCHEMA[name].dims
+
+
+def _harmonic_shape(name, shape, grid) -> tuple:
+    """The shape of harmonic variable ``name`` in a sweep of task grid ``shape`` (seed last) and science grid
+    ``grid`` (n_particles before seed): on the science grid when sampled at every count, else once per
+    cluster; then q, when it has it."""
+    q = (len(schema.HARMONIC_Q),) if "q" in schema.SCHEMA[name].dims else ()
+    return (*(grid if _at_every_count(name) else shape), *q)
 
 
 class _Stream:

@@ -64,8 +64,8 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None,
     Its Rg along the growth is kept at ``history`` (``growth_counts(counts)``,
     computed once per batch); its positions and diffusion times only when
     ``stored`` (else empty). With ``walkers``, the harmonic measure of the
-    cluster as grown (its largest count) is sampled with that many walkers
-    (``harmonic``). Never raises: a failure is returned as an ``error``
+    cluster at each count is sampled with that many walkers (``harmonic``).
+    Never raises: a failure is returned as an ``error``
     result with its message.
     """
     try:
@@ -77,7 +77,7 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None,
         lattice = cluster.params["model"] == "lattice"
         measures = shape.cluster_measures(points, prefix, history, lattice=lattice, scales=scales)
         if walkers:
-            measures.update(harmonic(cluster, walkers, harmonic_seed(root_seed, task)))
+            measures.update(harmonic(cluster, walkers, harmonic_seed(root_seed, task), counts))
         return {
             **measures,
             "n_grown": prefix.astype(np.int64),
@@ -93,16 +93,27 @@ def measure_task(task, counts, scales, root_seed, stored, history, cluster=None,
         return error_result(counts, len(scales), task.params["dim"], f"{type(err).__name__}: {err}", walkers)
 
 
-def harmonic(cluster, walkers, seed) -> dict:
-    """The harmonic measurement of a grown cluster: ``walkers`` walkers fired at it from ``seed``
-    (``measures.harmonic.harmonic_measure``), its spectrum D(q) at ``schema.HARMONIC_Q`` with its
-    standard errors and ok flags (``stats.multifractal``, its jackknife drawn from the same seed), and the
-    deposition depth: the ``schema.HARMONIC`` variables of one task."""
-    measure = harmonic_measure(cluster, walkers, seed)
-    spectrum = multifractal_spectrum(measure, q=schema.HARMONIC_Q, seed=seed)
+def harmonic(cluster, walkers, seed, counts) -> dict:
+    """The harmonic measurement of a grown cluster: the ``schema.HARMONIC`` variables of one task.
+
+    ``walkers`` walkers from ``seed`` are fired (``measures.harmonic.harmonic_measure``) at the cluster
+    as it was at each of ``counts`` it reached (its first particles: the cluster then) and as grown:
+    the Renyi entropies at ``schema.HARMONIC_Q`` of each count's measure, of all the walkers and of
+    the first half, whose growth with the cluster gives D(q) by size (``stats.multifractal.size_scaling``);
+    and of the cluster as grown, its box spectrum D(q) with standard errors and ok flags (its jackknife
+    drawn from the same seed) and the deposition depth. Every count's walkers come from the same seed.
+    """
+    q = schema.HARMONIC_Q
+    entropy, half = (np.full((len(counts), len(q)), np.nan) for _ in range(2))
+    for k, m in enumerate([*(m for m in counts if m < cluster.n), cluster.n]):
+        measure = harmonic_measure(cluster.prefix(m), walkers, seed)
+        if k < len(counts) and counts[k] == m:
+            entropy[k], half[k] = measure.renyi_entropies(q), measure.renyi_entropies(q, first=walkers // 2)
+    spectrum = multifractal_spectrum(measure, q=q, seed=seed)
     depth, spread = measure.depth
     return {"harmonic_D": spectrum.D.astype(np.float64), "harmonic_D_stderr": spectrum.stderr.astype(np.float64),
-            "harmonic_D_ok": spectrum.ok.astype(np.int8), "harmonic_depth": np.float64(depth),
+            "harmonic_D_ok": spectrum.ok.astype(np.int8), "harmonic_entropy": entropy,
+            "harmonic_entropy_half": half, "harmonic_depth": np.float64(depth),
             "harmonic_depth_spread": np.float64(spread)}
 
 
@@ -133,7 +144,8 @@ def error_result(counts, n_scales, dim, message, walkers=0) -> dict:
     shapes = {"box_count": (n_counts, n_scales), "radius_gyration_history": len(growth_counts(counts))}
     result = {name: schema.blank(name, shapes.get(name, n_counts)) for name in (*schema.SCIENCE, "wall_time")}
     if walkers:
-        result.update({name: schema.blank(name, len(schema.HARMONIC_Q) if "q" in schema.SCHEMA[name].dims else ())
+        dims = {"n_particles": n_counts, "q": len(schema.HARMONIC_Q)}
+        result.update({name: schema.blank(name, tuple(dims[d] for d in schema.SCHEMA[name].dims if d in dims))
                        for name in schema.HARMONIC})
     result["status"][:] = Status.error
     return {**result, "points": np.zeros((0, dim)), "diffusion_time": schema.blank("diffusion_time", 0),
