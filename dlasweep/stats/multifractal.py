@@ -57,8 +57,31 @@ PER_OCTAVE = 4
 """Box sides per factor of two."""
 
 
+class _Moments:
+    """A result indexed by moment q (its attribute ``q``): ``at`` finds a moment's index."""
+
+    q: np.ndarray
+
+    def at(self, q: float) -> int:
+        """The index of moment ``q``.
+
+        Parameters
+        ----------
+        q : float
+            A moment of ``self.q``.
+
+        Returns
+        -------
+        int
+        """
+        where = np.flatnonzero(np.isclose(self.q, q))
+        if not len(where):
+            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
+        return int(where[0])
+
+
 @dataclass(frozen=True)
-class Spectrum:
+class Spectrum(_Moments):
     """The generalised dimensions and the f(alpha) spectrum of a sampled measure.
 
     Attributes
@@ -104,13 +127,6 @@ class Spectrum:
     sampling: np.ndarray
     bias: np.ndarray
     counts: int
-
-    def at(self, q: float) -> int:
-        """The index of moment ``q``."""
-        where = np.flatnonzero(np.isclose(self.q, q))
-        if not len(where):
-            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
-        return int(where[0])
 
 
 def _sides(extent, min_scale):
@@ -288,7 +304,7 @@ def multifractal_spectrum(points, counts=None, q=DEFAULT_Q, *, min_scale: float 
 
 
 @dataclass(frozen=True)
-class SeedSpectrum:
+class SeedSpectrum(_Moments):
     """D(q) of a configuration over its seeds.
 
     Attributes
@@ -307,13 +323,6 @@ class SeedSpectrum:
     ci_lo: np.ndarray
     ci_hi: np.ndarray
     n: np.ndarray
-
-    def at(self, q: float) -> int:
-        """The index of moment ``q``."""
-        where = np.flatnonzero(np.isclose(self.q, q))
-        if not len(where):
-            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
-        return int(where[0])
 
 
 def seed_spectrum(q, D, ok) -> SeedSpectrum:
@@ -352,7 +361,7 @@ def seed_spectrum(q, D, ok) -> SeedSpectrum:
 
 
 @dataclass(frozen=True)
-class SizeScaling:
+class SizeScaling(_Moments):
     """D(q) of a configuration's harmonic measure from its growth with the cluster's size, between successive counts.
 
     Attributes
@@ -395,13 +404,6 @@ class SizeScaling:
     halsey_ci_lo: np.ndarray
     halsey_ci_hi: np.ndarray
     seeds: int
-
-    def at(self, q: float) -> int:
-        """The index of moment ``q``."""
-        where = np.flatnonzero(np.isclose(self.q, q))
-        if not len(where):
-            raise KeyError(f"q={q} not in the spectrum's q: {self.q.tolist()}")
-        return int(where[0])
 
 
 def size_scaling(q, counts, rg, entropy, half=None, *, resamples: int = 2000, seed: int = 0) -> SizeScaling:
