@@ -37,12 +37,12 @@ from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
 from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, lockstep_flag, model_from, sticks_xo
-from ..walk import return_to_plane, return_to_sphere, seed_stream, xdir, xo
+from ..walk import drift_dir, drift_to_plane, return_to_plane, return_to_sphere, seed_stream, xdir, xo
 from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
 from .field import FIELD_CAP, FIELD_MASK, field_place
 from .lockstep import grow_in_lockstep
 from .parents import lattice_parents
-from .walker import FAR_CLEAR, attach, contact_sticks, near_walk, outside, release, site
+from .walker import FAR_CLEAR, attach, contact_sticks, drifted_move, near_walk, outside, release, site
 from .words import fine2, fine3, rebuild, regrow, site_word, word_at
 
 JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
@@ -144,6 +144,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                                 grid)
     stickiness, max_steps, jumps = model.stickiness, model.max_steps, model.jumps
     alpha, noise = model.neighbour_alpha, model.noise_reduction
+    drift, mu0, mu1, mu2 = model.drift, model.drift_x, model.drift_y, model.drift_z
+    a0, a1, a2 = (mu0 / drift, mu1 / drift, mu2 / drift) if drift > 0.0 else (0.0, 0.0, 0.0)  # its direction
     hits = Dict.empty(key_type=types.int64, value_type=types.int64)  # noise reduction's touches by site
     launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
     up = dim - 1
@@ -210,7 +212,9 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 total += 1
                 pending += 1
                 budget -= 1
-                if line:
+                if line and drift > 0.0:
+                    drift_to_plane(rng, dim, pos, launch_r, size, mu0, mu1, mu2)
+                elif line:
                     return_to_plane(rng, dim, pos, launch_r, size)
                 elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
                     need_launch = True
@@ -227,7 +231,7 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 stuck, taken = near_walk(
                     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
                     boxed or launch_box, box_lo, box_hi, kill_r if kill else return_r,
-                    max(budget, 0), alpha,
+                    max(budget, 0), alpha, mu0, mu1, mu2,
                 )
                 s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
                 total += taken
@@ -302,6 +306,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 # >>> step_to
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 m = np.int64(u * nm)
+                if drift > 0.0:
+                    m = drifted_move(moves, u, mu0, mu1, mu2)
                 n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
                 if line:
                     n0 = n0 % period
@@ -344,16 +350,20 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
             total += 1
             pending += 1
             budget -= 1
-            from_far = reach >= CIRCLE_MIN and reach > half
+            # under a drift the lattice square's exit tables and Brownian motion's square exit do not hold:
+            # circle jumps (``walk.drift_dir``) from CIRCLE_MIN on, single drifted steps below
+            from_far = reach >= CIRCLE_MIN and (reach > half or drift > 0.0)
             if from_far:
-                if square >= reach:  # the square (cube) reaches as far as the circle, and holds more
+                if drift > 0.0:
+                    s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * reach, a0, a1, a2)
+                elif square >= reach:  # the square (cube) reaches as far as the circle, and holds more
                     s0, s1, s2, s3, u0, u1, u2 = square_exit(s0, s1, s2, s3, dim)
                 else:
                     s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 pos[0] += reach * u0
                 pos[1] += reach * u1
                 pos[2] += reach * u2
-            elif half >= 2:
+            elif half >= 2 and drift == 0.0:
                 # exact: where the lattice walk first leaves the square of half-width `half`
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 u *= t_start[half + 1] - t_start[half]
@@ -369,6 +379,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 # no particle within two sites: a plain step
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 m = np.int64(u * nm)
+                if drift > 0.0:
+                    m = drifted_move(moves, u, mu0, mu1, mu2)
                 for a in range(dim):
                     pos[a] = q[a] + moves[m, a]
             if line:
