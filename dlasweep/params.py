@@ -267,7 +267,7 @@ PARAMETERS = {
     "drift": Parameter(
         float, 0.0, f"[0, {MAX_DRIFT:g}]",
         "uniform drift of the walkers: v / (2 D), the inverse of the length beyond which the walk is ballistic "
-        "(1/sites, 1/diameters; 0 = plain DLA)", units="1/length",
+        "(1/sites, 1/diameters; 0 = plain DLA)",
         note="a point or block seed needs kill_factor > 1 or a box (no exact return against a drift); on the "
              "lattice a step goes along move m with probability (1 + drift u.m) / M",
         checks=(_negative, _above(MAX_DRIFT, f"{MAX_DRIFT:g}", " (ballistic within a site)"),
