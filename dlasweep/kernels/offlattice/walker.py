@@ -9,7 +9,10 @@ holds no particle, by the exact exit law (``walk.ball_exit``). Near it, exact ne
 distances come from a neighbour list of radius ``LIST_RADIUS`` gathered
 around an anchor point: while the walker stays near the anchor its free
 distance is a minimum over a handful of centres. Inside the ``EPS`` shell
-it moves by ``RAY`` with an exact ray cast (``contact``).
+it moves by ``RAY`` with an exact ray cast (``contact``). Under a drift
+(``model.drift``) every move from a sphere's centre draws its direction from
+the drifted exit law (``walk.drift_dir``), and the off-centre ball exit gives
+way to the sphere about the walker.
 """
 
 import numpy as np
