@@ -19,7 +19,7 @@ from dlasweep.kernels.lattice import lattice_growth as lattice_grow
 from dlasweep.kernels.lattice import walker as lattice_walker
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.words import rebuild
-from dlasweep.kernels.model import sticks_xo
+from dlasweep.kernels.model import drift_flag, sticks_xo
 from dlasweep.kernels.offlattice import grid
 from dlasweep.kernels.offlattice import walker as offlattice_walker
 
@@ -189,8 +189,8 @@ def test_touches_and_step_to_are_near_step(dim, moore, line, drift):
             got, *got_rs = sticks_xo(stickiness, *got_rs)
             got_rs = np.array(got_rs, np.uint64)  # numba returns Python ints, which it would type by value
         if not got:
-            got_rs = lattice_walker.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period, drift,
-                                            *mu, *got_rs)
+            got_rs = lattice_walker.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period,
+                                            drift_flag(drift), *mu, *got_rs)
         assert got == want
         np.testing.assert_array_equal(pos, want_q)
         np.testing.assert_array_equal(np.array(got_rs, np.uint64), want_rs)

@@ -92,6 +92,15 @@ def lockstep_flag(walkers):
     return None if walkers == 1 else True
 
 
+def drift_flag(drift):
+    """The lattice growth kernel's ``drifted`` argument for a ``drift``: None for none, True for one.
+
+    As ``lockstep_flag``: numba prunes the branches on ``drifted is not None`` while it types the
+    kernel, so plain DLA's walk is compiled without the drift's moves, and keeps its speed.
+    """
+    return None if drift == 0.0 else True
+
+
 @borrow
 def sticks(stickiness, rng):
     """The sticking rule: a walker at contact sticks with probability

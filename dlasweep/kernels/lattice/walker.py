@@ -303,7 +303,7 @@ def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
 
 
 @borrow
-def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, drift, mu0, mu1, mu2, s0, s1, s2, s3):
+def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, drifted, mu0, mu1, mu2, s0, s1, s2, s3):
     """One lattice step from site q to a random neighbour, into ``pos``
     unless the neighbour is occupied (or below the substrate); the stream
     in registers, returned. ``_grow`` holds a copy of this body, spelled out.
@@ -316,8 +316,8 @@ def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, drift,
         Receives the new site.
     moves, nm, line, period
         As ``touches`` takes them.
-    drift : float
-        The drift's length; 0: uniform moves.
+    drifted : None or True
+        Whether a drift tilts the move (``model.drift_flag``); None: uniform moves, compiled without the tilt.
     mu0, mu1, mu2 : float
         The drift vector (``drifted_move``).
     s0, s1, s2, s3 : uint64
@@ -325,7 +325,7 @@ def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, drift,
     """
     s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
     m = np.int64(u * nm)
-    if drift > 0.0:
+    if drifted is not None:
         m = drifted_move(moves, u, mu0, mu1, mu2)
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
     if line:
