@@ -112,6 +112,9 @@ about 1000 N walks."""
 MIN_CONTACT_DISTANCE = 0.5
 """Smallest contact_distance: particles come no closer than it, so that the walk's neighbour lists
 (``kernels.offlattice.walker.LCAP_CLOSE``) hold every centre within their radius (3D: about 1600 at 0.5)."""
+MAX_DRIFT = 1.0
+"""Largest drift (1/sites, 1/diameters): beyond length 1/drift the walk is ballistic, so at 1 a walker goes
+nearly straight from its first site; on the lattice a larger tilt would give a move a negative probability."""
 MAX_COUNT = 2 ** 62
 """Largest step budget: the kernels count steps in int64."""
 MAX_SEED = 2 ** 63 - 1
@@ -130,6 +133,32 @@ def _above(high, shown, why=""):
 
 def _negative(v, p, given):
     return f"{v} is negative" if v < 0 else None
+
+
+def drift_vector(p):
+    """The drift as a vector, ``drift`` times the unit vector of ``drift_angle`` and ``drift_azimuth``
+    (x, y, z; z 0 in 2D), in 1/sites or 1/diameters: the walk's mean velocity over twice its diffusion
+    constant."""
+    theta, phi = math.radians(p["drift_angle"]), math.radians(p["drift_azimuth"])
+    if p["dim"] == 2:
+        unit = (math.sin(theta), -math.cos(theta), 0.0)
+    else:
+        unit = (math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), -math.cos(theta))
+    return tuple(p["drift"] * c for c in unit)
+
+
+def _tilt_problem(v, p):
+    """What is wrong with a lattice drift ``v`` whose tilt gives some move a negative probability:
+    ``1 + drift u.m`` must stay >= 0 for every move m of the neighbourhood."""
+    if v == 0.0 or p["model"] != "lattice":
+        return None
+    mu = drift_vector({**p, "drift": v})
+    moore = p["neighbours"] != 2 * p["dim"]
+    steepest = sum(map(abs, mu)) if moore else max(map(abs, mu))  # the largest u.m over the moves
+    if steepest > 1.0 + 1e-12:
+        return (f"{v} tilts a move of neighbours={p['neighbours']} to a negative probability in this direction "
+                f"(1 - {steepest:.3g} < 0; nearest neighbours allow up to 1)")
+    return None
 
 
 def _neighbourhood(nb, p):
@@ -235,6 +264,31 @@ PARAMETERS = {
                 lambda f, p, given: "contact_distance applies only to model='offlattice' (on the lattice: "
                 "noise_reduction)" if f != 1.0 and p["model"] == "lattice" else None,
                 lambda f, p, given: "contact_distance needs walkers=1" if f != 1.0 and p["walkers"] > 1 else None)),
+    "drift": Parameter(
+        float, 0.0, f"[0, {MAX_DRIFT:g}]",
+        "uniform drift of the walkers: v / (2 D), the inverse of the length beyond which the walk is ballistic "
+        "(1/sites, 1/diameters; 0 = plain DLA)",
+        note="a point or block seed needs kill_factor > 1 or a box (no exact return against a drift); on the "
+             "lattice a step goes along move m with probability (1 + drift u.m) / M",
+        checks=(_negative, _above(MAX_DRIFT, f"{MAX_DRIFT:g}", " (ballistic within a site)"),
+                lambda v, p, given: _tilt_problem(v, p),
+                lambda v, p, given: "drift needs walkers=1 (lockstep walkers take unbiased steps)"
+                if v > 0.0 and p["walkers"] > 1 else None,
+                lambda v, p, given: f"drift with seed_shape={p['seed_shape']!r} needs kill_factor > 1 or size > 0 "
+                "(the exact return to the launch circle assumes no drift)"
+                if v > 0.0 and p["seed_shape"] != "line" and p["kill_factor"] == 0.0 and p["size"] == 0 else None)),
+    "drift_angle": Parameter(
+        float, 0.0, "[0, 180]",
+        "the drift's direction: degrees from down (-y in 2D, -z in 3D) towards +x", units="degree",
+        checks=(lambda a, p, given: None if 0.0 <= a <= 180.0 else f"{a} is not in [0, 180]",
+                lambda a, p, given: f"{a} points the drift away from the substrate (above 90 degrees walkers "
+                "escape upwards)" if a > 90.0 and p["drift"] > 0.0 and p["seed_shape"] == "line" else None)),
+    "drift_azimuth": Parameter(
+        float, 0.0, "[0, 360)",
+        "3D: the drift's direction about the vertical axis, degrees from +x towards +y", units="degree",
+        checks=(lambda a, p, given: None if 0.0 <= a < 360.0 else f"{a} is not in [0, 360)",
+                lambda a, p, given: "an azimuth applies only to dim=3 (2D: drift_angle alone)"
+                if a != 0.0 and p["dim"] == 2 else None)),
     "max_steps": Parameter(int, 0, "an integer in [0, 2**62]", "walk-step budget per cluster (0 = none); growth "
                                                                "stops with status step_limit when it runs out",
                            checks=(_negative, _above(MAX_COUNT, "2**62"))),

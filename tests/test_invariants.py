@@ -13,7 +13,7 @@ cross the substrate. Each cluster is checked against the model's geometry:
 
 The substrate variants come in every combination of dimension, neighbours,
 launch and kill rule that the kernels branch on; the rest are the variants of
-``test_models.CASES`` grown larger.
+``test_models.CASES`` grown larger, and drift's (``DRIFTS``, ``test_drift``).
 """
 
 import numpy as np
@@ -44,9 +44,25 @@ SUBSTRATES = {
     "off-plane": dict(model="offlattice", dim=3, seed_shape="line", size=64),
     "off-plane-launch-box": dict(model="offlattice", dim=3, seed_shape="line", size=64, launch="box"),
     "off-plane-kill": dict(model="offlattice", dim=3, seed_shape="line", size=64, kill_factor=1.5),
+    "lattice-line-drift": dict(seed_shape="line", size=256, drift=0.05, drift_angle=40.0),
+    "lattice-plane-drift-sideways": dict(dim=3, seed_shape="line", size=64, drift=0.1, drift_angle=90.0,
+                                         drift_azimuth=30.0),
+    "off-line-drift": dict(model="offlattice", seed_shape="line", size=256, drift=0.05, drift_angle=20.0),
+    "off-plane-drift-kill": dict(model="offlattice", dim=3, seed_shape="line", size=64, drift=0.2, kill_factor=1.5),
 }
+DRIFTS = {
+    "lattice-drift": dict(drift=0.02, kill_factor=2.0),
+    "lattice-drift-moore": dict(drift=0.1, drift_angle=45.0, neighbours=8, kill_factor=2.0),
+    "lattice-drift-box": dict(drift=0.05, drift_angle=70.0, size=400),
+    "lattice-3d-drift": dict(dim=3, drift=0.05, drift_angle=60.0, drift_azimuth=200.0, kill_factor=2.0),
+    "off-drift": dict(model="offlattice", drift=0.02, kill_factor=2.0),
+    "off-drift-sticky": dict(model="offlattice", drift=0.05, stickiness=0.3, kill_factor=2.0),
+    "off-drift-step": dict(model="offlattice", drift=0.05, step=0.3, kill_factor=2.0),
+    "off-3d-drift": dict(model="offlattice", dim=3, drift=0.1, drift_angle=150.0, kill_factor=2.0),
+}
+"""Drift (``test_drift``) at a point seed, where it needs a kill circle or a box, and on substrates."""
 VARIANTS = {**{f"{name}-{N}": kw for name, kw in CASES.items() if kw.get("seed_shape") != "line"},
-            **SUBSTRATES}
+            **SUBSTRATES, **DRIFTS}
 
 
 @pytest.fixture(scope="module", params=sorted(VARIANTS))

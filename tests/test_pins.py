@@ -19,7 +19,7 @@ from dlasweep.kernels.lattice import lattice_growth as lattice_grow
 from dlasweep.kernels.lattice import walker as lattice_walker
 from dlasweep.kernels.lattice.exits import unit_moves
 from dlasweep.kernels.lattice.words import rebuild
-from dlasweep.kernels.model import sticks_xo
+from dlasweep.kernels.model import drift_flag, sticks_xo
 from dlasweep.kernels.offlattice import grid
 from dlasweep.kernels.offlattice import walker as offlattice_walker
 
@@ -135,15 +135,17 @@ def test_the_lattice_walks_distance_bound_is_distance_bound_spelled_out():
     assert copy(lattice_grow._grow, "distance_bound") == body(lattice_walker.distance_bound)
 
 
+@pytest.mark.parametrize("drift", [0.0, 0.4])
 @pytest.mark.parametrize("dim, moore, line", [(2, False, False), (2, True, False), (3, False, False),
                                               (3, True, False), (2, False, True), (3, False, True)])
-def test_touches_and_step_to_are_near_step(dim, moore, line):
+def test_touches_and_step_to_are_near_step(dim, moore, line, drift):
     """The single walker's step as ``_grow`` spells it out (``touches``,
     the sticking rule, ``step_to``: the stream in registers) sticks and
     moves as ``near_step`` does from the same sites and stream states, on
     random clusters, where the walk takes it: near the cluster or the
-    substrate."""
+    substrate; without and with a drift."""
     rng = np.random.default_rng(5 + dim + 10 * moore + 100 * line)
+    mu = tuple(drift * c for c in (0.6, -0.48, 0.64 if dim == 3 else 0.0))
     size = 24 if line else 0
     period = size if line else 0
     width, off = (4 * size, size) if line else (128, 64)
@@ -179,7 +181,7 @@ def test_touches_and_step_to_are_near_step(dim, moore, line):
         stickiness = (1.0, 0.4)[tried % 2]
         want_q, want_rs = q.copy(), stream.copy()
         want = lattice_walker.near_step(words, dim, start, blocks, width, off, want_q, moves, period, stickiness,
-                                          want_rs, near, 1.0)
+                                          want_rs, near, 1.0, *mu)
         pos = q.astype(np.float64)
         got_rs = tuple(stream)
         got = lattice_walker.touches(words, dim, blocks[0], width, off, q, moves, nm, line, period)
@@ -187,7 +189,8 @@ def test_touches_and_step_to_are_near_step(dim, moore, line):
             got, *got_rs = sticks_xo(stickiness, *got_rs)
             got_rs = np.array(got_rs, np.uint64)  # numba returns Python ints, which it would type by value
         if not got:
-            got_rs = lattice_walker.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period, *got_rs)
+            got_rs = lattice_walker.step_to(words, dim, blocks[0], width, off, q, pos, moves, nm, line, period,
+                                            drift_flag(drift), *mu, *got_rs)
         assert got == want
         np.testing.assert_array_equal(pos, want_q)
         np.testing.assert_array_equal(np.array(got_rs, np.uint64), want_rs)

@@ -80,14 +80,20 @@ and memory (docs/performance.md, "Benchmark and host"). With ``FULL_COUNT``, the
 speed drifts over the minutes between a model's first runs and its last. The cost exponent is
 given with the range its fit takes from the fastest and slowest runs of each N
 (``cost_exponent_range``)."""
+DRIFT = {"drift=0.01": {"drift": 0.01, "kill_factor": 2.0}}
+"""Drift's row: a crossover length of 100 sites (diameters), inside a cluster of ``LAW_COUNT``; a point
+seed under a drift needs a kill circle (``params``), here at twice the launch radius."""
 LAWS = {
-    "lattice-2d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.2": {"neighbour_alpha": 0.2}},
-    "lattice-3d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.5": {"neighbour_alpha": 0.5}},
-    "offlattice-2d": {"contact_distance=0.5": {"contact_distance": 0.5}},
-    "offlattice-3d": {"contact_distance=0.5": {"contact_distance": 0.5}},
+    "lattice-2d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.2": {"neighbour_alpha": 0.2},
+                   **DRIFT},
+    "lattice-3d": {"noise_reduction=4": {"noise_reduction": 4}, "neighbour_alpha=0.5": {"neighbour_alpha": 0.5},
+                   **DRIFT},
+    "offlattice-2d": {"contact_distance=0.5": {"contact_distance": 0.5}, **DRIFT},
+    "offlattice-3d": {"contact_distance=0.5": {"contact_distance": 0.5}, **DRIFT},
 }
 """The growth laws each model runs at ``LAW_COUNT`` beside its exact method, named ``parameter=value``
-as ``method``: their cost beside plain DLA's at the same N."""
+as ``method`` (drift's with the kill circle it needs, ``DRIFT``): their cost beside plain DLA's at the
+same N."""
 LAW_COUNT = 1_000_000
 NAIVE_COUNTS = [1_000, 3_000]
 QUICK_COUNT = 2_000

@@ -172,7 +172,7 @@ def _lattice_walk(dimension, model, moves, points, rngs, walkers, sites, steps, 
     times = np.zeros(0)
     for b in range(len(rngs)):
         lo, hi = b * BLOCK, min((b + 1) * BLOCK, walkers)
-        done, status = _grow(dimension, None, hi - lo, model, moves, marks, rngs[b], sites[lo:hi], steps[lo:hi],
+        done, status = _grow(dimension, None, None, hi - lo, model, moves, marks, rngs[b], sites[lo:hi], steps[lo:hi],
                              times, t_start, t_cut, t_alias, t_off, frozen)
         if status != codes.OK:
             return lo + done, status

@@ -10,7 +10,7 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import borrow, clock, inline, jit
-from ..params import SEED_SHAPES, STATUSES
+from ..params import SEED_SHAPES, STATUSES, drift_vector
 from .walk import xo
 
 OK = STATUSES.index("ok")
@@ -46,7 +46,7 @@ def diffusion_time(pending):
 Model = namedtuple("Model", [
     "dim", "neighbours", "stickiness", "seed_shape", "size", "launch_box", "launch_factor", "launch_margin",
     "kill_factor", "exact_return", "kill", "jumps", "step", "walkers", "max_steps",
-    "noise_reduction", "neighbour_alpha", "contact_distance",
+    "noise_reduction", "neighbour_alpha", "contact_distance", "drift", "drift_x", "drift_y", "drift_z",
 ])
 Model.__doc__ = """The resolved model parameters as the kernels take them (a numba named tuple).
 
@@ -55,7 +55,8 @@ Named as in ``dlasweep.params``; ``seed_shape`` is its code (``POINT``,
 ``exact_return`` and ``kill`` are what ``kill_factor`` means for the walk,
 derived once (``model_from``): a walker beyond the launch circle returns to it
 exactly, or is killed beyond ``kill_factor`` times its radius, or neither
-(a box kills at its walls).
+(a box kills at its walls). ``drift_x``, ``drift_y``, ``drift_z`` are the drift as a
+vector (``params.drift_vector``), ``drift`` its length.
 """
 
 
@@ -74,7 +75,8 @@ def model_from(p) -> Model:
         kill=bool(p["kill_factor"] > 0.0 and not launch_box),
         jumps=bool(p["jumps"]), step=float(p["step"]), walkers=int(p["walkers"]), max_steps=int(p["max_steps"]),
         noise_reduction=int(p["noise_reduction"]), neighbour_alpha=float(p["neighbour_alpha"]),
-        contact_distance=float(p["contact_distance"]),
+        contact_distance=float(p["contact_distance"]), drift=float(p["drift"]),
+        **dict(zip(("drift_x", "drift_y", "drift_z"), map(float, drift_vector(p)))),
     )
 
 
@@ -88,6 +90,15 @@ def lockstep_flag(walkers):
     times: docs/performance.md).
     """
     return None if walkers == 1 else True
+
+
+def drift_flag(drift):
+    """The lattice growth kernel's ``drifted`` argument for a ``drift``: None for none, True for one.
+
+    As ``lockstep_flag``: numba prunes the branches on ``drifted is not None`` while it types the
+    kernel, so plain DLA's walk is compiled without the drift's moves, and keeps its speed.
+    """
+    return None if drift == 0.0 else True
 
 
 @borrow

@@ -1,7 +1,8 @@
 """Exact random-walk moves shared by every model.
 
 Uniform directions, walk-on-spheres jumps, and the exact return of a walker
-from outside the launch circle/sphere or above the launch line/plane; and the
+from outside the launch circle/sphere or above the launch line/plane; their
+laws under a drift (``drift_dir``, ``drift_to_plane``); and the
 kernels' hot-loop random stream, a xoshiro256+ generator seeded from the
 numpy Generator (numpy's Generator costs several times more per draw from
 numba).
@@ -274,4 +275,106 @@ def return_to_plane(rng, dim, pos, height, width):
         a = 2.0 * np.pi * rng.random()
         pos[0] = (pos[0] + rad * np.cos(a)) % width
         pos[1] = (pos[1] + rad * np.sin(a)) % width
+    pos[up] = height
+
+
+@inline
+def drift_dir(s0, s1, s2, s3, dim, kappa, a0, a1, a2):
+    """Where Brownian motion with drift leaves a ball from its centre, as a unit vector: the density
+    on the sphere is proportional to exp(kappa a.x), a von Mises (2D) or von Mises-Fisher (3D) law.
+
+    By Girsanov's theorem the drift reweights a driftless path by exp(mu.x - |mu|**2 D t) at its
+    exit point x and time t; from the centre, x and t are independent without drift (rotational
+    symmetry), so the exit point's law is the uniform one tilted by exp(mu.x), whatever the time:
+    ``kappa`` is |mu| times the radius. 2D draws Best and Fisher's rejection (1979; its constants
+    written without the cancellation of their usual form at small kappa, its uniform angle's cosine
+    and sign from ``xdir``); 3D the inverse of the law of w = a.x, w = 1 + log(1 - x (1 - exp(-2
+    kappa))) / kappa (``log1p``, ``expm1``: no cancellation at small kappa), and a uniform angle about a.
+    At kappa 0 it is ``xdir``.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : uint64
+        The stream's state (``xo``).
+    dim : int
+        The dimension, 2 or 3.
+    kappa : float
+        The concentration, >= 0: the drift (v / (2 D)) times the radius.
+    a0, a1, a2 : float
+        The drift's unit direction (a2 0 in 2D).
+
+    Returns
+    -------
+    tuple
+        The next state ``s0, s1, s2, s3`` and the vector's three components (the third 0 in 2D).
+    """
+    if kappa <= 0.0:
+        return xdir(s0, s1, s2, s3, dim)
+    if dim == 2:
+        tau = 1.0 + np.sqrt(1.0 + 4.0 * kappa * kappa)
+        rho = 2.0 * kappa / (tau + np.sqrt(2.0 * tau))
+        r = (1.0 + rho * rho) / (2.0 * rho)
+        while True:
+            s0, s1, s2, s3, z, side, _ = xdir(s0, s1, s2, s3, 2)
+            f = (1.0 + r * z) / (r + z)
+            c = kappa * (r - f)
+            s0, s1, s2, s3, x = xo(s0, s1, s2, s3)
+            if c * (2.0 - c) > x or np.log(c / x) + 1.0 - c >= 0.0:
+                break
+        f = min(1.0, max(-1.0, f))
+        t = np.sqrt(1.0 - f * f) if side >= 0.0 else -np.sqrt(1.0 - f * f)
+        return s0, s1, s2, s3, f * a0 - t * a1, f * a1 + t * a0, 0.0
+    s0, s1, s2, s3, x = xo(s0, s1, s2, s3)
+    w = min(1.0, max(-1.0, 1.0 + np.log1p(x * np.expm1(-2.0 * kappa)) / kappa))
+    s0, s1, s2, s3, c, s, _ = xdir(s0, s1, s2, s3, 2)  # a uniform angle about the axis
+    v0, v1, v2 = _about_axis(a0, a1, a2, w, c, s)
+    return s0, s1, s2, s3, v0, v1, v2
+
+
+@jit
+def inverse_gaussian(rng, mean, shape):
+    """A draw of the inverse Gaussian law of ``mean`` and ``shape`` (Michael, Schucany and Haas 1976),
+    its root written as 1 / (1 + t + sqrt(t (t + 2))), without the cancellation of the usual form
+    when the drift is large; ``rng`` the numpy Generator."""
+    y = rng.standard_normal() ** 2
+    t = mean * y / (2.0 * shape)
+    x = mean / (1.0 + t + np.sqrt(t * (t + 2.0)))
+    return x if rng.random() * (mean + x) <= mean else mean * mean / x
+
+
+@borrow
+def drift_to_plane(rng, dim, pos, height, width, mu0, mu1, mu2):
+    """``return_to_plane`` under the drift mu = (mu0, mu1, mu2) (v / (2 D), its last axis's component
+    <= 0: towards the plane): where the walker at ``pos`` above ``height`` first hits it.
+
+    In the time unit where D is 1/2 the velocity is mu: the hitting time of the plane from height h is
+    inverse Gaussian of mean h / |mu_up| and shape h**2 (Levy's law h**2 / N**2 when mu_up is 0), and
+    each lateral axis moves by mu_a t plus a Gaussian of variance t, independent of the vertical
+    path; the periodic sides of width ``width`` wrap it. Exact.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the time and the offsets.
+    dim : int
+        The dimension, 2 or 3.
+    pos : float64 (3,)
+        The walker's position, moved in place.
+    height : float
+        The plane's height (last axis).
+    width : float
+        The sides' period.
+    mu0, mu1, mu2 : float
+        The drift vector; mu1 (2D) or mu2 (3D) is the vertical component.
+    """
+    up = dim - 1
+    h = pos[up] - height
+    down = -(mu1 if dim == 2 else mu2)
+    if down > 0.0:
+        t = inverse_gaussian(rng, h / down, h * h)
+    else:
+        t = h * h / rng.standard_normal() ** 2
+    pos[0] = (pos[0] + mu0 * t + np.sqrt(t) * rng.standard_normal()) % width
+    if dim == 3:
+        pos[1] = (pos[1] + mu1 * t + np.sqrt(t) * rng.standard_normal()) % width
     pos[up] = height

@@ -18,6 +18,9 @@ jumps to where Brownian motion leaves the square (cube) free of particles
 about it (``exits.square_exit``), or the circle (sphere) where that reaches
 farther (outside the cluster's circle); outside the launch circle it returns
 exactly (Poisson kernel) instead of wandering off.
+Under a drift (``model.drift``) the steps are tilted (``walker.drifted_move``),
+the circle jumps draw the drifted exit law (``walk.drift_dir``) and the exact
+square tables and square exits, which have none, give way to single steps.
 
 The single walker's loop (``_grow``) spells out its per-step helpers
 (``walker.distance_bound``, ``touches``, ``step_to``): a call that passes
@@ -36,13 +39,13 @@ from ..._jit import cached, call_literal, clock, jit
 from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
-from ..model import STEPS_DTYPE, checkpoint, diffusion_time, grown, lockstep_flag, model_from, sticks_xo
-from ..walk import return_to_plane, return_to_sphere, seed_stream, xdir, xo
+from ..model import STEPS_DTYPE, checkpoint, diffusion_time, drift_flag, grown, lockstep_flag, model_from, sticks_xo
+from ..walk import drift_dir, drift_to_plane, return_to_plane, return_to_sphere, seed_stream, xdir, xo
 from .exits import TABLE_MAX, exit_tables, square_exit, symmetry, unit_moves
 from .field import FIELD_CAP, FIELD_MASK, field_place
 from .lockstep import grow_in_lockstep
 from .parents import lattice_parents
-from .walker import FAR_CLEAR, attach, contact_sticks, near_walk, outside, release, site
+from .walker import FAR_CLEAR, attach, contact_sticks, drifted_move, near_walk, outside, release, site
 from .words import fine2, fine3, rebuild, regrow, site_word, word_at
 
 JUMP_MARGIN = 2.0  # sites kept between a Brownian jump (square or circle) and the nearest particle
@@ -50,8 +53,8 @@ CIRCLE_MIN = 16.0  # smallest Brownian jump: below it the exact square jumps do 
 
 
 @jit
-def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias, t_off,
-          frozen):
+def _grow(dimension, lockstep, drifted, n, model, moves, marks, rng, points, steps, times, t_start, t_cut, t_alias,
+          t_off, frozen):
     """Grow a lattice cluster of up to ``n`` particles.
 
     After the seed, one walker at a time is released on the launch circle
@@ -71,6 +74,9 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
         ``dim`` away (``_jit``; docs/performance.md has the gain).
     lockstep : None or True
         ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
+    drifted : None or True
+        ``model.drift_flag(model.drift)``: the drift's moves are compiled in only where it is on,
+        as the lockstep walk is.
     n : int
         Most particles to grow, the seed's included.
     model : Model
@@ -144,6 +150,9 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                                 grid)
     stickiness, max_steps, jumps = model.stickiness, model.max_steps, model.jumps
     alpha, noise = model.neighbour_alpha, model.noise_reduction
+    drift, mu0, mu1, mu2 = model.drift, model.drift_x, model.drift_y, model.drift_z
+    a0, a1, a2 = (mu0 / drift, mu1 / drift, mu2 / drift) if drift > 0.0 else (0.0, 0.0, 0.0)  # its direction
+    no_tables = drifted is not None  # under a drift: no exact square tables (they have no drifted law)
     hits = Dict.empty(key_type=types.int64, value_type=types.int64)  # noise reduction's touches by site
     launch_box, kill, kill_factor = model.launch_box, model.kill, model.kill_factor
     up = dim - 1
@@ -211,7 +220,10 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 pending += 1
                 budget -= 1
                 if line:
-                    return_to_plane(rng, dim, pos, launch_r, size)
+                    if drifted is not None:
+                        drift_to_plane(rng, dim, pos, launch_r, size, mu0, mu1, mu2)
+                    else:
+                        return_to_plane(rng, dim, pos, launch_r, size)
                 elif not return_to_sphere(rng, dim, pos, launch_r, scratch):
                     need_launch = True
                     break
@@ -227,7 +239,7 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 stuck, taken = near_walk(
                     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
                     boxed or launch_box, box_lo, box_hi, kill_r if kill else return_r,
-                    max(budget, 0), alpha,
+                    max(budget, 0), alpha, mu0, mu1, mu2,
                 )
                 s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
                 total += taken
@@ -302,6 +314,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 # >>> step_to
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 m = np.int64(u * nm)
+                if drifted is not None:
+                    m = drifted_move(moves, u, mu0, mu1, mu2)
                 n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
                 if line:
                     n0 = n0 % period
@@ -344,16 +358,20 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
             total += 1
             pending += 1
             budget -= 1
-            from_far = reach >= CIRCLE_MIN and reach > half
+            # under a drift the lattice square's exit tables and Brownian motion's square exit do not hold:
+            # circle jumps (``walk.drift_dir``) from CIRCLE_MIN on, single drifted steps below
+            from_far = reach >= CIRCLE_MIN and (reach > half or no_tables)
             if from_far:
-                if square >= reach:  # the square (cube) reaches as far as the circle, and holds more
+                if drifted is not None:
+                    s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * reach, a0, a1, a2)
+                elif square >= reach:  # the square (cube) reaches as far as the circle, and holds more
                     s0, s1, s2, s3, u0, u1, u2 = square_exit(s0, s1, s2, s3, dim)
                 else:
                     s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
                 pos[0] += reach * u0
                 pos[1] += reach * u1
                 pos[2] += reach * u2
-            elif half >= 2:
+            elif half >= 2 and not no_tables:
                 # exact: where the lattice walk first leaves the square of half-width `half`
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 u *= t_start[half + 1] - t_start[half]
@@ -369,6 +387,8 @@ def _grow(dimension, lockstep, n, model, moves, marks, rng, points, steps, times
                 # no particle within two sites: a plain step
                 s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
                 m = np.int64(u * nm)
+                if drifted is not None:
+                    m = drifted_move(moves, u, mu0, mu1, mu2)
                 for a in range(dim):
                     pos[a] = q[a] + moves[m, a]
             if line:
@@ -420,8 +440,8 @@ def occupy(hits, q, noise):
 
 
 @jit
-def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps, times, counts, statuses, seconds,
-               t_start, t_cut, t_alias, t_off):
+def _grow_each(dimension, lockstep, drifted, n, model, moves, marks, rngs, points, steps, times, counts, statuses,
+               seconds, t_start, t_cut, t_alias, t_off):
     """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays.
 
     One compiled call grows a whole batch, so that a sweep's small clusters
@@ -431,7 +451,7 @@ def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps,
     ----------
     dimension : int
         The model's dimension, a literal: each is compiled apart, and only when used.
-    lockstep, n, model, moves, marks
+    lockstep, drifted, n, model, moves, marks
         As ``_grow`` takes them.
     rngs : list of numpy.random.Generator
         One generator a cluster (a reflected list: ``_jit``).
@@ -453,8 +473,8 @@ def _grow_each(dimension, lockstep, n, model, moves, marks, rngs, points, steps,
     literally(dimension)
     for i in range(len(rngs)):
         start = clock()
-        counts[i], statuses[i] = _grow(dimension, lockstep, n, model, moves, marks, rngs[i], points[i], steps[i],
-                                       times[i], t_start, t_cut, t_alias, t_off, None)
+        counts[i], statuses[i] = _grow(dimension, lockstep, drifted, n, model, moves, marks, rngs[i], points[i],
+                                       steps[i], times[i], t_start, t_cut, t_alias, t_off, None)
         seconds[i] = clock() - start
 
 
@@ -493,8 +513,9 @@ def grow_lattice(n, p, marks, rngs, times=None):
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
     moves = unit_moves(model.dim, moore)
-    call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), n, model, moves, np.asarray(marks, np.int64),
-                 list(rngs), points, steps, times, counts, statuses, seconds, *exit_tables(model.dim, moore))
+    call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), drift_flag(model.drift), n, model, moves,
+                 np.asarray(marks, np.int64), list(rngs), points, steps, times, counts, statuses, seconds,
+                 *exit_tables(model.dim, moore))
     nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
     period = model.size if model.seed_shape == codes.LINE else 0
     return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)

@@ -99,7 +99,7 @@ def grow_in_lockstep(n, model, moves, marks, rng, rs, t0, times, passed, points,
             continue
         stuck, taken = near_walk(
             words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
-            True, box_lo, box_hi, 0.0, 1, model.neighbour_alpha,
+            True, box_lo, box_hi, 0.0, 1, model.neighbour_alpha, 0.0, 0.0, 0.0,  # no drift: params refuses it
         )
         total += taken
         pending += taken

@@ -43,6 +43,29 @@ def outside(q, dim, line, lo, hi):
 
 
 @borrow
+def drifted_move(moves, u, mu0, mu1, mu2):
+    """The move a uniform ``u`` picks under the drift mu = (mu0, mu1, mu2): move m with probability
+    (1 + mu.m) / M, so that the mean step is mu times the per-axis variance (the drift's v / (2 D)).
+
+    The moves come in opposite pairs, m and M - 1 - m (``exits.unit_moves``); ``u`` picks a pair
+    uniformly and its fractional part, a second uniform, the pair's sign.
+
+    Parameters
+    ----------
+    moves : int64 (M, 3)
+        Unit moves.
+    u : float
+        A uniform in [0, 1).
+    mu0, mu1, mu2 : float
+        The drift vector (``params.drift_vector``), with 1 + mu.m >= 0 for every move.
+    """
+    v = u * (moves.shape[0] >> 1)
+    m = np.int64(v)
+    tilt = mu0 * moves[m, 0] + mu1 * moves[m, 1] + mu2 * moves[m, 2]
+    return m if 2.0 * (v - m) < 1.0 + tilt else moves.shape[0] - 1 - m
+
+
+@borrow
 def occupied_neighbours(words, dim, start, blocks, width, off, q, moves, period):
     """How many of site q's neighbours under ``moves`` are occupied, the substrate's
     sites (below height 0) counted as occupied: B of the ``neighbour_alpha`` law.
@@ -102,7 +125,7 @@ def contact_sticks(words, dim, start, blocks, width, off, q, moves, period, stic
 
 
 @borrow
-def near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha):
+def near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha, mu0, mu1, mu2):
     """One site of the exact lattice walk: stick, or step to a random neighbour.
 
     The walker first sticks if it touches the cluster, with probability
@@ -137,6 +160,8 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
     alpha : float
         The ``neighbour_alpha`` law's alpha, in (0, 1] (``model.neighbour_stickiness``);
         1: every contact sticks with ``stickiness``, and the neighbours go uncounted.
+    mu0, mu1, mu2 : float
+        The drift vector (``drifted_move``); all 0: uniform moves.
     """
     up = dim - 1
     line = period > 0
@@ -148,7 +173,10 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
             stuck, rs[0], rs[1], rs[2], rs[3] = sticks_xo(stickiness, rs[0], rs[1], rs[2], rs[3])
         if stuck:
             return True
-    m = np.int64(uniform(rs) * moves.shape[0])
+    u = uniform(rs)
+    m = np.int64(u * moves.shape[0])
+    if mu0 != 0.0 or mu1 != 0.0 or mu2 != 0.0:
+        m = drifted_move(moves, u, mu0, mu1, mu2)
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
     if line:
         n0 = n0 % period
@@ -163,7 +191,7 @@ def near_step(words, dim, start, blocks, width, off, q, moves, period, stickines
 @borrow
 def near_walk(
     words, dim, start, blocks, width, off, q, moves, period, stickiness, rs,
-    boxed, lo, hi, radius, budget, alpha,
+    boxed, lo, hi, radius, budget, alpha, mu0, mu1, mu2,
 ):
     """Single lattice steps from site q until the walker sticks or may leave.
 
@@ -200,6 +228,8 @@ def near_walk(
         Most steps; 0: no limit.
     alpha : float
         The ``neighbour_alpha`` law's alpha, as ``near_step`` takes it.
+    mu0, mu1, mu2 : float
+        The drift vector, as ``near_step`` takes it.
 
     Returns
     -------
@@ -214,7 +244,8 @@ def near_walk(
         ingrid = 0 <= i < width and 0 <= j < width and 0 <= k < width
         # a clear level-1 cell: no particle within two sites
         near = ingrid and maps.test(words, dim, start, blocks, 1, i >> 1, j >> 1, k >> 1)
-        if near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha):
+        if near_step(words, dim, start, blocks, width, off, q, moves, period, stickiness, rs, near, alpha, mu0, mu1,
+                     mu2):
             return True, taken
         taken += 1
         if taken == budget:
@@ -272,7 +303,7 @@ def touches(words, dim, nb0, width, off, q, moves, nm, line, period):
 
 
 @borrow
-def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1, s2, s3):
+def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, drifted, mu0, mu1, mu2, s0, s1, s2, s3):
     """One lattice step from site q to a random neighbour, into ``pos``
     unless the neighbour is occupied (or below the substrate); the stream
     in registers, returned. ``_grow`` holds a copy of this body, spelled out.
@@ -285,11 +316,17 @@ def step_to(words, dim, nb0, width, off, q, pos, moves, nm, line, period, s0, s1
         Receives the new site.
     moves, nm, line, period
         As ``touches`` takes them.
+    drifted : None or True
+        Whether a drift tilts the move (``model.drift_flag``); None: uniform moves, compiled without the tilt.
+    mu0, mu1, mu2 : float
+        The drift vector (``drifted_move``).
     s0, s1, s2, s3 : uint64
         The xoshiro256+ state (``walk.xo``).
     """
     s0, s1, s2, s3, u = xo(s0, s1, s2, s3)
     m = np.int64(u * nm)
+    if drifted is not None:
+        m = drifted_move(moves, u, mu0, mu1, mu2)
     n0, n1, n2 = q[0] + moves[m, 0], q[1] + moves[m, 1], q[2] + moves[m, 2]
     if line:
         n0 = n0 % period

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..._jit import borrow, inline, jit
 from ..model import sticks
-from ..walk import unit_vector
+from ..walk import drift_dir
 from .celllist import gather
 from .grid import map_dist
 
@@ -185,7 +185,7 @@ def cast(w, u, length, dim, size, line, pts, nxt, gi, gf, dirr, heads, lx, ly, l
 
 @jit
 def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start, blocks,
-               cells, field, lx, ly, lz, li, e, u, normal):
+               cells, field, lx, ly, lz, li, e, u, normal, m0, m1, m2):
     """One Gaussian step with the naive end-point check; True on contact.
 
     The step is proposed from w; if its end point is free it is taken, even
@@ -234,10 +234,14 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
         Scratch: the step's direction.
     normal : float64 (4,)
         At a contact, receives the normal and the particle touched (``settle``).
+    m0, m1, m2 : float
+        The step's mean: under a drift mu (v / (2 D)) a Gaussian step of variance step**2 an axis
+        lasts step**2 / (2 D), in which the walker drifts by mu step**2; 0 without one.
     """
     up = dim - 1
+    e[0], e[1], e[2] = m0, m1, m2
     for a in range(dim):
-        e[a] = w[a] + step * rng.normal()
+        e[a] = w[a] + e[a] + step * rng.normal()
     sub = line and e[up] < 0.0
     if not sub and map_dist(e, dim, size, gi, words, start, blocks, cells, field) > 0.0:
         for a in range(dim):
@@ -268,10 +272,14 @@ def gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, wor
 
 
 @borrow
-def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li):
+def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li,
+            kappa, a0, a1, a2):
     """A walker at contact: sticks with probability ``stickiness`` (True), else
     moves away by ``REJECT`` into the outward half-space, ray-cast, and
-    tries again at every new contact. Returns (stuck, moves made).
+    tries again at every new contact. Returns (stuck, moves made). Under a
+    drift the move's direction is the sphere's exit law (``walk.drift_dir``,
+    concentration ``kappa``), reflected into the outward half-space as the
+    uniform one is.
 
     Parameters
     ----------
@@ -292,7 +300,7 @@ def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf
     rng : numpy.random.Generator
         Draws the sticking (``model.sticks``).
     rs : uint64 (4,)
-        The xoshiro256+ stream that draws the directions (``walk.unit_vector``).
+        The xoshiro256+ stream that draws the directions (``walk.drift_dir``).
     pts : float64 (n, dim)
         The particles' centres.
     nxt : int32 (n,)
@@ -305,12 +313,16 @@ def rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf
         Scratch for the centres gathered about the ray (``celllist.gather``).
     li : int64 (LCAP,)
         Scratch for their rows.
+    kappa : float
+        The drift times ``REJECT``; 0: uniform directions.
+    a0, a1, a2 : float
+        The drift's unit direction.
     """
     moves = 0
     while True:
         if sticks(stickiness, rng):
             return True, moves
-        unit_vector(rs, dim, u)
+        rs[0], rs[1], rs[2], rs[3], u[0], u[1], u[2] = drift_dir(rs[0], rs[1], rs[2], rs[3], dim, kappa, a0, a1, a2)
         dot = u[0] * normal[0] + u[1] * normal[1] + u[2] * normal[2]
         if dot < 0.0:
             for a in range(3):

@@ -113,14 +113,14 @@ def grow_in_lockstep(n, model, marks, rng, rs, t0, times, passed, pts, order, st
                     contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
             else:
                 contact = gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
-                                     blocks, cells, field, mx, my, mz, mi, e, u, normal)
+                                     blocks, cells, field, mx, my, mz, mi, e, u, normal, 0.0, 0.0, 0.0)  # no drift
             stuck = False
             if contact:
                 if step > 0.0:
                     stuck = sticks(stickiness, rng)
                 else:
                     stuck, moves = rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr,
-                                           heads, mx, my, mz, mi)
+                                           heads, mx, my, mz, mi, 0.0, 0.0, 0.0, 0.0)
                     total += moves
                     pending += moves
             if stuck:

@@ -9,7 +9,10 @@ holds no particle, by the exact exit law (``walk.ball_exit``). Near it, exact ne
 distances come from a neighbour list of radius ``LIST_RADIUS`` gathered
 around an anchor point: while the walker stays near the anchor its free
 distance is a minimum over a handful of centres. Inside the ``EPS`` shell
-it moves by ``RAY`` with an exact ray cast (``contact``).
+it moves by ``RAY`` with an exact ray cast (``contact``). Under a drift
+(``model.drift``) every move from a sphere's centre draws its direction from
+the drifted exit law (``walk.drift_dir``), and the off-centre ball exit gives
+way to the sphere about the walker.
 """
 
 import numpy as np
@@ -20,9 +23,9 @@ from .. import maps
 from .. import model as codes
 from ..centres import FS, cell_centre, centre_bound, pyramid_ball
 from ..model import diffusion_time, sticks
-from ..walk import ball_exit, return_to_plane, return_to_sphere, xdir
+from ..walk import ball_exit, drift_dir, drift_to_plane, return_to_plane, return_to_sphere, xdir
 from .celllist import INF, gather, insert, more_heads
-from .contact import EPS, RAY, cast, gauss_move, ray_to, rebound, settle
+from .contact import EPS, RAY, REJECT, cast, gauss_move, ray_to, rebound, settle
 from .geometry import COVERED, TILES_USED
 from .grid import FAR_CLEAR, NEAR, face_gap, mark, walk_geometry
 
@@ -218,6 +221,8 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
     jumps, max_steps, ret, kill = model.jumps, model.max_steps, model.exact_return, model.kill
     line = model.seed_shape == codes.LINE
     launch_box = model.launch_box
+    drift, mu0, mu1, mu2 = model.drift, model.drift_x, model.drift_y, model.drift_z
+    a0, a1, a2 = (mu0 / drift, mu1 / drift, mu2 / drift) if drift > 0.0 else (0.0, 0.0, 0.0)  # its direction
     boxed = size > 0 and not line
     ceiling = line and launch_box
     hb = 0.5 * size
@@ -245,7 +250,10 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
             if line:
                 h = w[up]
                 if ret and h > launch_r:
-                    return_to_plane(rng, dim, w, launch_r, size)
+                    if drift > 0.0:
+                        drift_to_plane(rng, dim, w, launch_r, size, mu0, mu1, mu2)
+                    else:
+                        return_to_plane(rng, dim, w, launch_r, size)
                     total += 1
                     pending += 1
                     list_ok = False
@@ -370,8 +378,10 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
             g = min(g, gb)
             far = False
             # ---- move
-            if not exact and ball > 0.0 and g == ball - gap - 1.0 and gb >= ball + gap and step == 0.0 and jumps:
-                # out of the ball about the pyramid cell's centre, which holds the one about w
+            if (not exact and ball > 0.0 and g == ball - gap - 1.0 and gb >= ball + gap and step == 0.0 and jumps
+                    and drift == 0.0):
+                # out of the ball about the pyramid cell's centre, which holds the one about w (not from its
+                # centre: under a drift, the sphere about w below instead)
                 c0 = cell_centre(X0, shift) - m0
                 c1 = cell_centre(X1, shift) - m1
                 c2 = cell_centre(X2, shift) - m2 if dim == 3 else 0.0
@@ -384,7 +394,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 # >>> jump onto the sphere of radius g, as below for Gaussian steps (a test
                 # holds the copies together): one condition for both is slower
                 # (docs/performance.md), so the tested shape stays
-                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * g, a0, a1, a2)
                 w[0] += g * u0
                 w[1] += g * u1
                 w[2] += g * u2
@@ -404,7 +414,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                     anchor[2] = w[2]
                     nl = gather(anchor, RL, dim, size, pts, nxt, gi, gf, dirr, heads, lx, ly, lz, li)[0]
                     list_ok = True
-                s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * RAY, a0, a1, a2)
                 total += 1
                 pending += 1
                 best, hit = ray_to(w, u0, u1, u2, RAY, nl, lx, ly, lz, line, dim)
@@ -417,7 +427,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 contact = True
             elif step == 0.0:
                 # single unit steps everywhere (jumps=false)
-                s0, s1, s2, s3, u[0], u[1], u[2] = xdir(s0, s1, s2, s3, dim)
+                s0, s1, s2, s3, u[0], u[1], u[2] = drift_dir(s0, s1, s2, s3, dim, drift, a0, a1, a2)
                 total += 1
                 pending += 1
                 if g > 1.0:
@@ -428,7 +438,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
             else:
                 if jumps and g > GAUSS_JUMP * step:
                     # >>> jump
-                    s0, s1, s2, s3, u0, u1, u2 = xdir(s0, s1, s2, s3, dim)
+                    s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * g, a0, a1, a2)
                     w[0] += g * u0
                     w[1] += g * u1
                     w[2] += g * u2
@@ -440,7 +450,8 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 pending += 1
                 list_ok = False
                 if gauss_move(w, step, dim, size, line, rng, pts, nxt, gi, gf, dirr, heads, words, start,
-                              blocks, cells, field, mx, my, mz, mi, scratch, u, normal) and sticks(stickiness, rng):
+                              blocks, cells, field, mx, my, mz, mi, scratch, u, normal, mu0 * step * step,
+                              mu1 * step * step, mu2 * step * step) and sticks(stickiness, rng):
                     code = 1
                     break
                 continue
@@ -448,7 +459,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                 continue
             rs[0], rs[1], rs[2], rs[3] = s0, s1, s2, s3
             stuck, moves = rebound(w, u, normal, dim, size, line, stickiness, rng, rs, pts, nxt, gi, gf, dirr, heads,
-                                   mx, my, mz, mi)
+                                   mx, my, mz, mi, drift * REJECT, a0, a1, a2)
             s0, s1, s2, s3 = rs[0], rs[1], rs[2], rs[3]
             total += moves
             pending += moves
