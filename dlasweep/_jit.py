@@ -70,18 +70,29 @@ def call_literal(kernel, first, *args):
     *args
         The kernel's other arguments, typed as they are passed.
     """
+    return literal_entry(kernel, first, *args)(first, *args)
+
+
+def literal_entry(kernel, first, *args):
+    """The compiled ``kernel`` for the literal ``first`` and arguments of the types of ``args``, compiled
+    (or loaded) once: calling it skips the dispatcher's typing of every argument, so that a batch's
+    clusters can each be one call of it from Python (``call_literal`` takes the arguments' types at
+    each call). ``kernel``, ``first`` and ``args`` are ``call_literal``'s."""
     signature = (numba.types.literal(first),) + tuple(numba.typeof(a) for a in args)
-    return kernel.compile(signature)(first, *args)
+    return kernel.compile(signature)
 
 
-def cached(kernel, first, *more) -> bool:
+def cached(kernel, first, *more, last=...) -> bool:
     """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made)
     for the literal first argument ``first`` (a kernel compiled apart for each, as the dimension)
-    and arguments of the types of ``more`` after it.
+    and arguments of the types of ``more`` after it, and, when ``last`` is given, a last argument
+    of its type.
 
     Reads numba's own cache index, the one place this package looks inside numba."""
     types = tuple(numba.typeof(a) for a in more)
+    ends = [] if last is ... else [numba.typeof(last)]
     return any(getattr(key[0][0], "literal_value", None) == first and tuple(key[0][1:1 + len(types)]) == types
+               and list(key[0][len(key[0]) - len(ends):]) == ends
                for key in kernel._cache._cache_file._load_index())
 
 
