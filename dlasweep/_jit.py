@@ -7,10 +7,14 @@ that results are bit-identical wherever they are computed.
 The hot kernels are compiled for one dimension at a time: the dimension
 comes down to them as a literal argument (``numba.literally``), compiled
 only when used, and is turned there into a constant, ``dim =
-np.int64(2) if dimension == 2 else np.int64(3)`` (numba prunes the branch
-the literal rules out), for LLVM to fold the kernel's branches on it; not
-the literal itself, which would recompile every helper it is passed to.
-Python calls such a kernel through ``call_literal``.
+np.int64(2) if dimension == 2 else np.int64(3)``, for LLVM to fold the
+kernel's branches on it; not the literal itself, which would recompile
+every helper it is passed to. numba types and compiles both sides of a
+branch on the literal's value all the same: a branch it leaves out while it
+types a kernel is one on whether an argument is None, hence the kernels'
+None-or-True flags (``kernels.model.lockstep_flag``, ``gaussian_flag``).
+Python calls such a kernel through ``call_literal``, or ``literal_entry``
+for a batch.
 
 numba's cache checks only the defining file of a function: after editing a
 helper in another module, delete ``dlasweep/**/__pycache__/*.nb[ic]`` or the
