@@ -7,10 +7,14 @@ that results are bit-identical wherever they are computed.
 The hot kernels are compiled for one dimension at a time: the dimension
 comes down to them as a literal argument (``numba.literally``), compiled
 only when used, and is turned there into a constant, ``dim =
-np.int64(2) if dimension == 2 else np.int64(3)`` (numba prunes the branch
-the literal rules out), for LLVM to fold the kernel's branches on it; not
-the literal itself, which would recompile every helper it is passed to.
-Python calls such a kernel through ``call_literal``.
+np.int64(2) if dimension == 2 else np.int64(3)``, for LLVM to fold the
+kernel's branches on it; not the literal itself, which would recompile
+every helper it is passed to. numba types and compiles both sides of a
+branch on the literal's value all the same: a branch it leaves out while it
+types a kernel is one on whether an argument is None, hence the kernels'
+None-or-True flags (``kernels.model.lockstep_flag``, ``gaussian_flag``).
+Python calls such a kernel through ``call_literal``, or ``literal_entry``
+for a batch.
 
 numba's cache checks only the defining file of a function: after editing a
 helper in another module, delete ``dlasweep/**/__pycache__/*.nb[ic]`` or the
@@ -70,18 +74,29 @@ def call_literal(kernel, first, *args):
     *args
         The kernel's other arguments, typed as they are passed.
     """
+    return literal_entry(kernel, first, *args)(first, *args)
+
+
+def literal_entry(kernel, first, *args):
+    """The compiled ``kernel`` for the literal ``first`` and arguments of the types of ``args``, compiled
+    (or loaded) once: calling it skips the dispatcher's typing of every argument, so that a batch's
+    clusters can each be one call of it from Python (``call_literal`` takes the arguments' types at
+    each call). ``kernel``, ``first`` and ``args`` are ``call_literal``'s."""
     signature = (numba.types.literal(first),) + tuple(numba.typeof(a) for a in args)
-    return kernel.compile(signature)(first, *args)
+    return kernel.compile(signature)
 
 
-def cached(kernel, first, *more) -> bool:
+def cached(kernel, first, *more, last=...) -> bool:
     """Whether numba's on-disk cache holds compiled code of ``kernel`` (a function ``jit`` made)
     for the literal first argument ``first`` (a kernel compiled apart for each, as the dimension)
-    and arguments of the types of ``more`` after it.
+    and arguments of the types of ``more`` after it, and, when ``last`` is given, a last argument
+    of its type.
 
     Reads numba's own cache index, the one place this package looks inside numba."""
     types = tuple(numba.typeof(a) for a in more)
+    ends = [] if last is ... else [numba.typeof(last)]
     return any(getattr(key[0][0], "literal_value", None) == first and tuple(key[0][1:1 + len(types)]) == types
+               and list(key[0][len(key[0]) - len(ends):]) == ends
                for key in kernel._cache._cache_file._load_index())
 
 

@@ -299,7 +299,7 @@ def _grow(args) -> int:
     except ValueError as err:
         name, _, reason = str(err).partition(":")  # the message starts with the parameter's name
         raise UsageError(f"--{name.replace('_', '-')}:{reason}") from None
-    with growth_bar(args.n, resolved["model"], resolved["dim"], resolved["walkers"]) as bar:
+    with growth_bar(args.n, resolved) as bar:
         progress = None if bar is None else lambda particles, _: bar.update(particles - bar.n)
         cluster = grow(args.n, args.seed, progress=progress, **resolved)
     if cluster.status != _params.Status.ok.name:

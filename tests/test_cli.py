@@ -446,7 +446,7 @@ def test_generated_grow_arguments_run_or_exit_2(n, options, run_cli, tmp_path_fa
     assert (status == 0) == (folder / "c.nc").exists()
 
 
-def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
+def test_grow_shows_progress_on_a_terminal_only_and_what_compiles_in_a_log_too(run_cli, tmp_path, monkeypatch):
     from dlasweep import cli
 
     bars = []
@@ -454,11 +454,14 @@ def test_grow_shows_progress_on_a_terminal_only(run_cli, tmp_path, monkeypatch):
     monkeypatch.setattr(cli, "growth_bar", lambda *kernel: bars.append(real_bar(*kernel)) or bars[-1])
     status, _, err = run_cli("grow", "-n", "300", "-o", tmp_path / "piped.nc")
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
-    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     monkeypatch.setattr(importlib.import_module("dlasweep.growth.cluster"), "compiled",
-                        lambda model, dim, walkers: model != "offlattice")
+                        lambda params: params["model"] != "offlattice")
+    notice = "dlasweep grow: compiling the off-lattice 3D kernels, once: one to two minutes\n"
+    status, _, err = run_cli("grow", "-n", "30", "--model", "offlattice", "--dim", "3", "-o", tmp_path / "log.nc")
+    assert status == 0 and err == notice and bars[-1].__class__.__name__ == "nullcontext"
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
-    assert status == 0 and err.startswith("dlasweep grow: compiling kernels (once)\n")
+    assert status == 0 and err.startswith("dlasweep grow: compiling the off-lattice 2D kernels, once: about a minute\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
     with store.open_sweep(tmp_path / "shown.nc") as ds:
         np.testing.assert_array_equal(ragged.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)

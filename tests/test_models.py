@@ -12,7 +12,7 @@ import pytest
 
 import dlasweep as dla
 import naive
-from dlasweep.params import DEFAULTS
+from dlasweep.params import DEFAULTS, resolve
 
 N = 600
 CASES = {
@@ -324,10 +324,11 @@ def test_compiled_reads_numba_s_cache_of_each_growth_kernel(tmp_path):
     for model in ("lattice", "offlattice"):
         for dim in (2, 3):
             dla.grow(20, seed=1, model=model, dim=dim)
-            assert growth.compiled(model, dim)
-        assert not growth.compiled(model, 4)  # each dimension's kernel is compiled apart
-    code = ("import importlib; g = importlib.import_module('dlasweep.growth.cluster'); "
-            "print(g.compiled('lattice', 2), g.compiled('offlattice', 2))")
+            assert growth.compiled(resolve(model=model, dim=dim))
+        assert not growth.compiled({**resolve(model=model), "dim": 4})  # each dimension's kernel is compiled apart
+    code = ("import importlib; from dlasweep.params import resolve; "
+            "g = importlib.import_module('dlasweep.growth.cluster'); "
+            "print(g.compiled(resolve(model='lattice')), g.compiled(resolve(model='offlattice')))")
     fresh = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                            env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     assert fresh.stdout.split() == ["False", "False"]

@@ -315,35 +315,45 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
 
 def test_each_model_and_dimension_swept_is_a_kernel_of_its_own():
     """The kernels are compiled per dimension (``dlasweep._jit``) and apart for lockstep walkers
-    (``kernels.model.lockstep_flag``): each (model, dim, lockstep) swept is loaded (``_load_kernels``) and
-    looked up in the cache (``_compiles``) on its own."""
+    (``kernels.model.lockstep_flag``), and off the lattice for Gaussian steps (``kernels.model.gaussian_flag``):
+    each (model, dim, lockstep, gaussian) swept is loaded (``_load_kernels``) and looked up in the cache
+    (``_cold_kernels``) on its own."""
     spec = parse_spec("name = 'dims'\n[grid]\nn_particles = [5]\nseeds = 2\nsize = [40]\n"
                       "[model]\nmodel = ['lattice', 'offlattice']\ndim = [2, 3]\nwalkers = [1, 3, 5]\n")
     kernels = sweep._first_task_of_each_kernel(spec)
-    assert sorted(kernels) == [(model, dim, lockstep) for model in ("lattice", "offlattice") for dim in (2, 3)
-                               for lockstep in (False, True)]
-    assert all((task.params["model"], task.params["dim"], task.params["walkers"] > 1) == key
+    assert sorted(kernels) == [(model, dim, lockstep, False) for model in ("lattice", "offlattice")
+                               for dim in (2, 3) for lockstep in (False, True)]
+    assert all((task.params["model"], task.params["dim"], task.params["walkers"] > 1, False) == key
                for key, task in kernels.items())
+    stepped = parse_spec("name = 'steps'\n[grid]\nn_particles = [5]\nseeds = 2\n"
+                         "[model]\nmodel = 'offlattice'\nstep = [0.0, 0.5, 1.0]\n")
+    assert sorted(sweep._first_task_of_each_kernel(stepped)) == [("offlattice", 2, False, gaussian)
+                                                                 for gaussian in (False, True)]
 
 
 def test_a_spec_of_lockstep_walkers_compiles_when_only_one_walkers_kernel_is_cached(monkeypatch):
-    monkeypatch.setattr(sweep, "compiled", lambda model, dim, walkers: walkers == 1)
+    monkeypatch.setattr(sweep, "compiled", lambda params: params["walkers"] == 1)
     one = parse_spec("name = 'one'\n[grid]\nn_particles = [5]\nseeds = 1\nsize = [40]\n[model]\nwalkers = [1]\n")
     many = parse_spec("name = 'many'\n[grid]\nn_particles = [5]\nseeds = 1\nsize = [40]\n[model]\nwalkers = [1, 3]\n")
-    assert not sweep._compiles(one) and sweep._compiles(many)
+    assert sweep._cold_kernels(one) == [] and sweep._cold_kernels(many) == [("lattice", 2, True, False)]
 
 
 def test_a_cold_kernel_cache_is_announced_on_a_terminal(tmp_path, monkeypatch, capsys):
     spec = parse_spec(TINY_SPEC)
     code = ("import sys, dlasweep.sweep.runner as s, dlasweep.sweep.spec as p; "
-            "print(s._compiles(p.parse_spec(sys.argv[1])))")
+            "print(bool(s._cold_kernels(p.parse_spec(sys.argv[1]))))")
     cold = subprocess.run([sys.executable, "-c", code, TINY_SPEC], capture_output=True, text=True, check=True,
                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     dla.grow(20, 0, model="lattice")  # compiles into the cache, if it is not there yet
-    assert cold.stdout == "True\n" and not sweep._compiles(spec)
-    monkeypatch.setattr(sweep, "_compiles", lambda spec: True)
+    assert cold.stdout == "True\n" and not sweep._cold_kernels(spec)
+    cold_kernels = [("lattice", 2, False, False), ("lattice", 3, True, False)]
+    monkeypatch.setattr(sweep, "_cold_kernels", lambda spec: cold_kernels)
     dla.run_sweep(parse_spec("name = 'cold'\n[grid]\nn_particles = [5]\nseeds = 1\n"), progress=True)
-    assert capsys.readouterr().err.startswith("cold: compiling kernels (once)\n")
+    notice = "compiling the lattice 2D and lattice 3D lockstep kernels, once: one to two minutes each\n"
+    assert capsys.readouterr().err.startswith(f"cold: {notice}")
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)  # a log: the sweep's lines, the notice first
+    dla.run_sweep(parse_spec("name = 'logged'\n[grid]\nn_particles = [5]\nseeds = 1\n"))
+    assert capsys.readouterr().err.startswith(f"logged: {notice}")
 
 
 # Real processes: an external scheduler and workers, kill -9, resume.

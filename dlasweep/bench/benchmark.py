@@ -3,7 +3,8 @@
 Each (model, N) runs in a fresh interpreter so that its peak memory is its
 own, ``REPEATS`` times below ``HUGE_COUNT`` (the median kept); numba
 compilation is excluded by growing a small cluster first (the kernels are
-cached on disk). The naive baseline (single steps everywhere, a
+cached on disk), but in the ``cold`` rows: a user's first grow of ``targets.COLD_COUNT``
+particles, compiling included, on an empty numba cache. The naive baseline (single steps everywhere, a
 kill circle at twice the launch radius) runs at small N beside the exact
 method, so the gain is a ratio taken on the same machine at the same time.
 """
@@ -11,6 +12,7 @@ method, so the gain is a ratio taken on the same machine at the same time.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -23,6 +25,8 @@ from ..data import netcdf
 from ..data.schema import Variable
 from .host import MEMORY_SET, READS, RUN_SET, latency_line, read_latency, shared_cache
 from .targets import (
+    COLD_COUNT,
+    COLD_TARGET,
     MODELS,
     SCALING,
     cost_exponent,
@@ -41,7 +45,8 @@ BESIDE_A_RUN = {"host_read": RUN_SET, "memory_read": MEMORY_SET}
 """The host's reads just before and after each run (``_beside_the_host``): the MiB each reads, by the
 name of its variables (``host_read_before``, ``host_read_after``, ...) and of its column (``host ns``)."""
 BENCH_SCHEMA = {
-    "seconds": Variable(("run",), np.float64, "s", "wall time to grow the cluster, compilation excluded"),
+    "seconds": Variable(("run",), np.float64, "s",
+                        "wall time to grow the cluster, compilation excluded but in the cold rows"),
     "seconds_low": Variable(("run",), np.float64, "s", "fastest of the repeated runs of this model, method and N"),
     "seconds_high": Variable(("run",), np.float64, "s", "slowest of the repeated runs of this model, method and N"),
     "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
@@ -55,7 +60,8 @@ BENCH_SCHEMA = {
     "n": Variable(("run",), np.int64, "1", "target particle count"),
     "model": Variable(("run",), str, None, "model and dimension"),
     "method": Variable(("run",), str, None,
-                       "exact jumps, the naive single-step walk with a kill circle, or a growth law's parameter=value"),
+                       "exact jumps, the naive single-step walk with a kill circle, a growth law's parameter=value, "
+                       "or cold: the exact method's first grow on an empty numba cache, compiling included"),
 }
 """The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
 its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
@@ -112,7 +118,8 @@ def peak_mb():
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 params = json.loads(sys.argv[1]); n = int(sys.argv[2]); seed = int(sys.argv[3])
-dla.grow(50, seed=0, **params)  # load the compiled kernels
+if sys.argv[4:] != ["cold"]:
+    dla.grow(50, seed=0, **params)  # load the compiled kernels
 # (where numba's cache is cold it compiles them here, and the process keeps about 245 MB of that:
 # 3D lattice 1e4 peaked at 410 MB, then 163 with the cache filled)
 base = peak_mb()
@@ -123,16 +130,19 @@ print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.step
 """
 
 
-def probe(params: dict, n: int, seed: int = 1) -> dict:
+def probe(params: dict, n: int, seed: int = 1, cold: bool = False) -> dict:
     """Grow one cluster of ``n`` with ``params`` from ``seed`` in a fresh interpreter.
 
     Returns its seconds (compile excluded), status, steps and peak memory;
-    e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures.
+    e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures. With
+    ``cold``, the interpreter's numba cache is an empty folder and the seconds
+    are those of its first grow, compiling included: what a new user waits.
     """
-    out = subprocess.run(
-        [sys.executable, "-c", _PROBE, json.dumps(params), str(n), str(seed)],
-        capture_output=True, text=True, check=True,
-    )
+    with tempfile.TemporaryDirectory() as cache:
+        out = subprocess.run(
+            [sys.executable, "-c", _PROBE, json.dumps(params), str(n), str(seed), *(["cold"] if cold else [])],
+            capture_output=True, text=True, check=True, env={**os.environ, "NUMBA_CACHE_DIR": cache} if cold else None,
+        )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -145,7 +155,8 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         Add ``FULL_COUNT`` for every model and end with the targets table
         (``target_table``).
     quick : bool
-        Only the smallest N of each model (a smoke test).
+        Only the smallest N of each model (a smoke test), without the ``cold`` rows (each compiles
+        its model's kernels).
     huge : bool
         Also add ``HUGE_COUNT`` for the 2D models (implies ``full``).
     models : list of str, optional
@@ -161,6 +172,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
         counts += [HUGE_COUNT] if huge and "2d" in name else []
         counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
+        plan += [] if quick else [(name, "cold", params, COLD_COUNT)]
         plan += [(name, "exact", params, n) for n in counts]
         plan += [(name, method, {**params, **law}, QUICK_COUNT if quick else LAW_COUNT)
                  for method, law in LAWS.get(name, {}).items()]
@@ -176,9 +188,13 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
         again = (name, method, n) in runs
+        cold = method == "cold"  # once: a compile takes a minute, and spreads as the host's load does
         runs.setdefault((name, method, n), []).extend(
-            _beside_the_host(params, n) for _ in range(1 if quick or n >= HUGE_COUNT else REPEATS))
+            _beside_the_host(params, n, cold) for _ in range(1 if quick or cold or n >= HUGE_COUNT else REPEATS))
         r = _median_run(runs[name, method, n])
+        if cold:
+            echo(f"{name}: first grow of {n} on a cold cache {r['seconds']:.1f} s{verdict(r['seconds'], COLD_TARGET)}")
+            continue
         if again:
             echo(f"{name}: {n} again after the rest, {len(runs[name, method, n])} runs from "
                  f"{r['seconds_low']:.3f} to {r['seconds_high']:.3f} s, median {r['seconds']:.3f} s")
@@ -288,10 +304,11 @@ def harmonic_bench(full: bool = False, quick: bool = False, echo=print, grown=No
             "harmonic_walkers_per_second": rate, "harmonic_growth_particles_per_second": growth}
 
 
-def _beside_the_host(params: dict, n: int) -> dict:
-    """``probe``'s figures, with the host's read times (``BESIDE_A_RUN``) just before and after the run."""
+def _beside_the_host(params: dict, n: int, cold: bool = False) -> dict:
+    """``probe``'s figures (``cold``: on an empty numba cache), with the host's read times (``BESIDE_A_RUN``)
+    just before and after the run."""
     before = _host_reads("before")
-    run = probe(params, n)
+    run = probe(params, n, cold=True) if cold else probe(params, n)
     return {**run, **before, **_host_reads("after")}
 
 

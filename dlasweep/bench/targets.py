@@ -33,6 +33,11 @@ TARGETS = {
 """The targets on one core: seconds to grow (compile excluded) and
 memory added by growth per particle (bytes) at each N, and the cost exponent
 over ``SCALING``."""
+COLD_COUNT = 1_000
+"""Particles of the ``cold`` rows' first grow, on an empty numba cache (``benchmark.probe``)."""
+COLD_TARGET = 10.0
+"""Seconds a first grow of ``COLD_COUNT`` particles on an empty numba cache may take, compiling included:
+a new user's first ``dlasweep grow``."""
 SCALING = (10**5, 10**7)
 """The cost exponent is fitted from the first N to the second, and steps per particle compared between them."""
 STEPS_GROWTH_TARGET = 1.40

@@ -121,15 +121,23 @@ def rng_for(seed) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(seed))
 
 
-def compiled(model: str, dim: int, walkers: int = 1) -> bool:
-    """Whether numba's cache holds ``model``'s growth kernel for ``dim`` and ``walkers`` (it takes most of the
-    compile time; one walker and lockstep walkers are compiled apart, ``kernels.model.lockstep_flag``).
+def kernel_of(params: dict) -> tuple:
+    """(model, dim, lockstep, gaussian): what tells apart the growth kernels numba compiles for the resolved
+    parameters ``params``: one walker and lockstep walkers are compiled apart
+    (``kernels.model.lockstep_flag``), and so, off the lattice, are exact moves and Gaussian steps
+    (``kernels.model.gaussian_flag``)."""
+    return params["model"], params["dim"], params["walkers"] > 1, params["step"] > 0.0
+
+
+def compiled(params: dict) -> bool:
+    """Whether numba's cache holds the growth kernel of the resolved parameters ``params`` (``kernel_of``;
+    it takes most of the compile time).
 
     Only this process's cache is looked at: the embedded cluster's too.
     """
-    # The kernels name no entry kernel of their own yet: the one that takes most of the compile time.
-    kernels = {"lattice": lattice.lattice_growth, "offlattice": offlattice.offlattice_growth}
-    return kernels[model].compiled(dim, walkers)
+    if params["model"] == "lattice":
+        return lattice.lattice_growth.compiled(params["dim"], params["walkers"])
+    return offlattice.offlattice_growth.compiled(params["dim"], params["walkers"], params["step"])
 
 
 def grow(n: int, seed=0, *, checkpoints=None, progress=None, **params) -> Cluster:

@@ -29,7 +29,7 @@ from .lattice.lattice_growth import _grow
 from .lattice.parents import touched
 from .lattice.walker import GROWTH
 from .lattice.words import rebuild
-from .model import diffusion_time, model_from
+from .model import diffusion_time, gaussian_flag, model_from
 from .offlattice.grid import build_grid, level_starts
 from .offlattice.walker import neighbour_list, walk_to_contact
 from .walk import seed_stream
@@ -40,13 +40,15 @@ Seeding a block's stream costs about what one walk does; a block is thousands of
 
 
 @jit
-def _offlattice_walk(dimension, model, points, rngs, walkers, hits, where, steps):
+def _offlattice_walk(dimension, gaussian, model, points, rngs, walkers, hits, where, steps):
     """Walk ``walkers`` walkers against the off-lattice cluster ``points``, ``BLOCK`` to each Generator of ``rngs``.
 
     Parameters
     ----------
     dimension : int
         The model's dimension, a literal (``walker.walk_to_contact`` is compiled for it).
+    gaussian : None or True
+        ``model.gaussian_flag(model.step)``, as ``walker.walk_to_contact`` takes it.
     model : Model
         The model (``kernels.model.Model``).
     points : float64 (n, dim)
@@ -99,10 +101,11 @@ def _offlattice_walk(dimension, model, points, rngs, walkers, hits, where, steps
         rng = rngs[b]
         rs = seed_stream(rng)
         for i in range(b * BLOCK, min((b + 1) * BLOCK, walkers)):
-            stuck, total, pending = walk_to_contact(dimension, model, launch_r, model.kill_factor * launch_r,
-                                                    np.int64(0), np.int64(0), w, u, normal, scratch, anchor, lx, ly,
-                                                    lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks,
-                                                    cells, dirr, heads, field, pstart, geo, rs, rng)
+            stuck, total, pending = walk_to_contact(dimension, gaussian, model, launch_r,
+                                                    model.kill_factor * launch_r, np.int64(0), np.int64(0), w, u,
+                                                    normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi, pts, nxt,
+                                                    gi, gf, words, start, blocks, cells, dirr, heads, field, pstart,
+                                                    geo, rs, rng)
             if not stuck:
                 return i, codes.STEP_LIMIT
             hits[i] = np.int32(normal[3])
@@ -208,8 +211,9 @@ def frozen_walks(points, p, rngs, walkers):
     if p["model"] == "offlattice":
         hits = np.full(walkers, -1, np.int32)
         where = np.zeros(walkers)
-        done, status = call_literal(_offlattice_walk, model.dim, model, np.ascontiguousarray(points, np.float64),
-                                    list(rngs), int(walkers), hits, where, steps)
+        done, status = call_literal(_offlattice_walk, model.dim, gaussian_flag(model.step), model,
+                                    np.ascontiguousarray(points, np.float64), list(rngs), int(walkers), hits, where,
+                                    steps)
         return hits[:done], where[:done], steps[:done], int(status)
     moore = model.neighbours != 2 * model.dim
     moves = unit_moves(model.dim, moore)

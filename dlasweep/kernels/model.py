@@ -101,6 +101,17 @@ def drift_flag(drift):
     return None if drift == 0.0 else True
 
 
+def gaussian_flag(step):
+    """The off-lattice kernels' ``gaussian`` argument for a model's ``step``: None for 0, True for a Gaussian step.
+
+    As ``lockstep_flag``: the single walker's walk branches on ``gaussian is not
+    None``, which numba decides while it types it, so that a growth of exact
+    jumps and contacts (``step`` 0) is compiled without the Gaussian step and
+    its end-point check (``offlattice.contact.gauss_move``).
+    """
+    return None if step == 0.0 else True
+
+
 @borrow
 def sticks(stickiness, rng):
     """The sticking rule: a walker at contact sticks with probability

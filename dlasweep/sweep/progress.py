@@ -59,18 +59,39 @@ def _duration(seconds) -> str:
     return f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h"
 
 
-def growth_bar(n, model, dim, walkers=1):
+COMPILE_TIME = {2: "about a minute", 3: "one to two minutes"}
+"""How long a growth kernel takes to compile, by dimension, said roughly (a 3D kernel takes about
+twice a 2D one's time), so that the words hold on a faster or slower host; the figures are in
+docs/performance.md and in ``dlasweep bench``'s "first grow, cold cache" rows."""
+
+
+def compiling(kernels) -> str:
+    """What compiles and how long to expect, e.g. ``compiling the off-lattice 2D kernels, once: about a minute``.
+
+    ``kernels`` lists (model, dim, lockstep, gaussian) of the growth kernels that numba's cache lacks
+    (``growth.cluster.kernel_of``); lockstep walkers and Gaussian steps are kernels of their own.
+    """
+    names = [f"{'off-lattice' if model == 'offlattice' else 'lattice'} {dim}D"
+             + (" lockstep" if lockstep else "") + (" Gaussian-step" if gaussian else "")
+             for model, dim, lockstep, gaussian in kernels]
+    each = " each" if len(names) > 1 else ""
+    return (f"compiling the {', '.join(names[:-1]) + ' and ' if len(names) > 1 else ''}{names[-1]} kernels, "
+            f"once: {COMPILE_TIME[max(dim for _, dim, _, _ in kernels)]}{each}")
+
+
+def growth_bar(n, params):
     """A progress bar for ``grow`` on a terminal (particles, rate, time left), else ``nullcontext(None)``.
 
-    Announces first that the kernels compile when numba's cache lacks them.
-    The bar shows once growth has taken a second: small clusters print nothing more.
+    Says first, on a terminal or in a log, what compiles and how long to expect when numba's cache
+    lacks the kernel of the resolved parameters ``params`` (``compiling``). The bar shows once growth
+    has taken a second: small clusters print nothing more.
     """
+    from ..growth.cluster import compiled, kernel_of
+
+    if not compiled(params):
+        print(f"dlasweep grow: {compiling([kernel_of(params)])}", file=sys.stderr, flush=True)
     if not sys.stderr.isatty():
         return contextlib.nullcontext()
-    from ..growth.cluster import compiled
-
-    if not compiled(model, dim, walkers):
-        print("dlasweep grow: compiling kernels (once)", file=sys.stderr)
     from tqdm import tqdm
 
     return tqdm(total=n, unit=" particles", unit_scale=True, desc="grow", file=sys.stderr, delay=1.0, leave=False)

@@ -39,11 +39,11 @@ from tqdm import tqdm
 
 from ..data import netcdf, schema
 from ..data.paths import writable
-from ..growth.cluster import compiled
+from ..growth.cluster import compiled, kernel_of
 from ..stats.fit import growth_counts
 from .parts import PARTICLES, Parts, parts_folder
 from .precision import Precision
-from .progress import Lines
+from .progress import Lines, compiling
 from .session import collector_eased, connected
 from .spec import Spec, load_spec
 from .task import error_result, measure_tasks, sweep_scales
@@ -121,8 +121,9 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                 session.callback(stream.writer.discard)
             if todo:
                 if dask_client is None:
-                    if progress and client is None and scheduler_file is None and _compiles(spec):
-                        print(f"{spec.name}: compiling kernels (once)", file=sys.stderr)
+                    cold = (progress or lines) and client is None and scheduler_file is None and _cold_kernels(spec)
+                    if cold:  # on a terminal and in a log: what compiles, and for about how long
+                        print(f"{spec.name}: {compiling(cold)}", file=sys.stderr, flush=True)
                     dask_client = session.enter_context(connected(client, scheduler_file, workers or spec.workers, most,
                                                                   functools.partial(_load_kernels, spec)))
                     if announce:
@@ -157,18 +158,18 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
     return ds
 
 
-def _compiles(spec) -> bool:
-    """Whether the first tasks compile kernels: numba's cache lacks a growth kernel the spec needs."""
-    return not all(compiled(model, dim, task.params["walkers"])
-                   for (model, dim, _), task in _first_task_of_each_kernel(spec).items())
+def _cold_kernels(spec) -> list:
+    """The growth kernels the spec needs that numba's cache lacks (``growth.cluster.kernel_of``): the first
+    tasks compile them."""
+    return [kernel for kernel, task in _first_task_of_each_kernel(spec).items() if not compiled(task.params)]
 
 
 def _first_task_of_each_kernel(spec) -> dict:
-    """(model name, dimension, lockstep walkers) -> the first task of the spec that grows it: each is a kernel of
-    its own."""
+    """``growth.cluster.kernel_of`` (model, dimension, lockstep walkers, Gaussian steps) -> the first task of
+    the spec that grows it: each is a kernel of its own."""
     first = {}
     for task in spec.tasks(replicates=1):
-        first.setdefault((task.params["model"], task.params["dim"], task.params["walkers"] > 1), task)
+        first.setdefault(kernel_of(task.params), task)
     return first
 
 

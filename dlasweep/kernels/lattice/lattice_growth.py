@@ -31,11 +31,13 @@ footprint) and the ways of overlapping the walk's reads that were tried are
 in docs/performance.md.
 """
 
+import time
+
 import numpy as np
 from numba import literally, types
 from numba.typed import Dict
 
-from ..._jit import cached, call_literal, clock, jit
+from ..._jit import cached, clock, jit, literal_entry
 from .. import maps
 from .. import model as codes
 from ..centres import pyramid_dist
@@ -439,47 +441,12 @@ def occupy(hits, q, noise):
     return True
 
 
-@jit
-def _grow_each(dimension, lockstep, drifted, n, model, moves, marks, rngs, points, steps, times, counts, statuses,
-               seconds, t_start, t_cut, t_alias, t_off):
-    """``_grow`` with each generator of the list ``rngs`` in turn, into row i of the other arrays.
-
-    One compiled call grows a whole batch, so that a sweep's small clusters
-    do not pay a call from Python each.
-
-    Parameters
-    ----------
-    dimension : int
-        The model's dimension, a literal: each is compiled apart, and only when used.
-    lockstep, drifted, n, model, moves, marks
-        As ``_grow`` takes them.
-    rngs : list of numpy.random.Generator
-        One generator a cluster (a reflected list: ``_jit``).
-    points : int32 (B, n, dim)
-        Row i receives cluster i's sites.
-    steps : uint32 (B, n)
-        Row i receives cluster i's diffusion times.
-    times : float64 (B, K)
-        Row i receives cluster i's seconds at each mark.
-    counts : int64 (B,)
-        Receive the particles grown.
-    statuses : int64 (B,)
-        Receive the status codes.
-    seconds : float64 (B,)
-        Receive each growth's seconds in all.
-    t_start, t_cut, t_alias, t_off
-        The exit tables, as ``_grow`` takes them.
-    """
-    literally(dimension)
-    for i in range(len(rngs)):
-        start = clock()
-        counts[i], statuses[i] = _grow(dimension, lockstep, drifted, n, model, moves, marks, rngs[i], points[i],
-                                       steps[i], times[i], t_start, t_cut, t_alias, t_off, None)
-        seconds[i] = clock() - start
-
-
 def grow_lattice(n, p, marks, rngs, times=None):
-    """Grow lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow`` for the meaning.
+    """Grow lattice clusters, one with each generator; see ``dlasweep.grow`` for the meaning.
+
+    The growth kernel, compiled once for the batch's argument types (``_jit.literal_entry``), is
+    called for each generator: a batch compiles the same one kernel as a single cluster, and a call
+    from Python costs less than a small cluster's growth (docs/performance.md).
 
     Parameters
     ----------
@@ -505,6 +472,8 @@ def grow_lattice(n, p, marks, rngs, times=None):
         times : float64 seconds at each of ``marks`` (NaN when not reached)
         seconds : float, the whole growth
     """
+    if not rngs:
+        return []
     model = model_from(p)
     moore = model.neighbours != 2 * model.dim
     points = np.zeros((len(rngs), n, model.dim), np.int32)
@@ -513,9 +482,13 @@ def grow_lattice(n, p, marks, rngs, times=None):
     counts, statuses = np.zeros((2, len(rngs)), np.int64)
     seconds = np.zeros(len(rngs))
     moves = unit_moves(model.dim, moore)
-    call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), drift_flag(model.drift), n, model, moves,
-                 np.asarray(marks, np.int64), list(rngs), points, steps, times, counts, statuses, seconds,
-                 *exit_tables(model.dim, moore))
+    tables = exit_tables(model.dim, moore)
+    args = (lockstep_flag(model.walkers), drift_flag(model.drift), n, model, moves, np.asarray(marks, np.int64))
+    kernel = literal_entry(_grow, model.dim, *args, rngs[0], points[0], steps[0], times[0], *tables, None)
+    for i, rng in enumerate(rngs):
+        start = time.perf_counter()
+        counts[i], statuses[i] = kernel(model.dim, *args, rng, points[i], steps[i], times[i], *tables, None)
+        seconds[i] = time.perf_counter() - start
     nseed = {codes.POINT: 1, codes.BLOCK: 1 << model.dim, codes.LINE: 0}[model.seed_shape]
     period = model.size if model.seed_shape == codes.LINE else 0
     return [grown(pts, st, lattice_parents(pts[:count], moves, nseed, period), count, *rest)
@@ -524,5 +497,5 @@ def grow_lattice(n, p, marks, rngs, times=None):
 
 def compiled(dim, walkers=1) -> bool:
     """Whether numba's on-disk cache holds this growth kernel for ``dim`` and ``walkers`` (most of its compile
-    time)."""
-    return cached(_grow_each, dim, lockstep_flag(walkers))
+    time): compiled to grow (``frozen`` None), not only for the harmonic measure."""
+    return cached(_grow, dim, lockstep_flag(walkers), last=None)

@@ -3,13 +3,15 @@
 in cell order as it grows, and ``grow_offlattice``, the entry point.
 """
 
+import time
+
 import numpy as np
 from numba import literally
 
-from ..._jit import cached, call_literal, clock, jit
+from ..._jit import cached, clock, jit, literal_entry
 from .. import maps
 from .. import model as codes
-from ..model import STEPS_DTYPE, checkpoint, grown, lockstep_flag, model_from
+from ..model import STEPS_DTYPE, checkpoint, gaussian_flag, grown, lockstep_flag, model_from
 from ..walk import seed_stream
 from .celllist import attachment_order, sort_cells, sort_tail
 from .grid import build_grid, level_starts, no_grid, regrow_grid
@@ -36,7 +38,7 @@ docs/performance.md)."""
 
 
 @jit
-def _grow(dimension, lockstep, n, model, marks, rng, times):
+def _grow(dimension, lockstep, gaussian, n, model, marks, rng, times):
     """Grow an off-lattice cluster of up to ``n`` particles.
 
     After the seed, ``walker.walk_to_contact`` brings one walker at a time to
@@ -54,6 +56,8 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
         The model's dimension, a literal that ``walker.walk_to_contact`` is compiled for.
     lockstep : None or True
         ``model.lockstep_flag(model.walkers)``: the lockstep walk is compiled in only where it runs.
+    gaussian : None or True
+        ``model.gaussian_flag(model.step)``, as ``walker.walk_to_contact`` takes it.
     n : int
         Most particles to grow, the seed's included.
     model : Model
@@ -147,10 +151,10 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
         elif boxed and launch_r > hb - 1.0:
             status = codes.BOUNDARY
             break
-        stuck, total, pending = walk_to_contact(dimension, model, launch_r, model.kill_factor * launch_r, total,
-                                                pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my, mz, mi,
-                                                pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads, field,
-                                                pstart, geo, rs, rng)
+        stuck, total, pending = walk_to_contact(dimension, gaussian, model, launch_r, model.kill_factor * launch_r,
+                                                total, pending, w, u, normal, scratch, anchor, lx, ly, lz, li, mx, my,
+                                                mz, mi, pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads,
+                                                field, pstart, geo, rs, rng)
         if not stuck:
             status = codes.STEP_LIMIT
             break
@@ -173,52 +177,32 @@ def _grow(dimension, lockstep, n, model, marks, rng, times):
     return pts, steps, parents, count, status
 
 
-@jit
-def _grow_each(dimension, lockstep, n, model, marks, rngs, times):
-    """``_grow`` with each generator of the list ``rngs`` in turn (row i of ``times``); its results and seconds.
-
-    Parameters
-    ----------
-    dimension : int
-        The model's dimension, a literal: each is compiled apart, and only when used.
-    lockstep, n, model, marks
-        As ``_grow`` takes them.
-    rngs : list of numpy.random.Generator
-        One generator a cluster (a reflected list: ``_jit``).
-    times : float64 (B, K)
-        Row i receives cluster i's seconds at each mark.
-
-    Returns
-    -------
-    list of tuple
-        For each generator, ``_grow``'s points, steps, parents, count and
-        status, its row of ``times`` and the growth's seconds.
-    """
-    literally(dimension)
-    out = []
-    for i in range(len(rngs)):
-        start = clock()
-        pts, steps, parents, count, status = _grow(dimension, lockstep, n, model, marks, rngs[i], times[i])
-        out.append((pts, steps, parents, count, status, times[i], clock() - start))
-    return out
-
-
 def grow_offlattice(n, p, marks, rngs, times=None):
-    """Grow off-lattice clusters, one with each generator, in one compiled call; see ``dlasweep.grow``.
+    """Grow off-lattice clusters, one with each generator; see ``dlasweep.grow``.
 
     Takes (``n``, ``p``, ``marks``, ``rngs``, ``times``) and returns what
     ``lattice.grow_lattice`` does, but ``points`` are
     the float64 centres of unit-diameter disks (spheres), (n_grown, dim), and
     a parent is the particle touched at contact (``contact.settle``).
+    The growth kernel, compiled once for the batch's argument types
+    (``_jit.literal_entry``), is called for each generator: a batch compiles the same one kernel as a
+    single cluster, and a call from Python costs less than a small cluster's growth (docs/performance.md).
     """
+    if not rngs:
+        return []
     times = np.full((len(rngs), len(marks)), np.nan) if times is None else times
     model = model_from(p)
-    grown_each = call_literal(_grow_each, model.dim, lockstep_flag(model.walkers), int(n), model,
-                              np.asarray(marks, np.int64), list(rngs), times)
-    return [grown(*result) for result in grown_each]
+    args = (lockstep_flag(model.walkers), gaussian_flag(model.step), int(n), model, np.asarray(marks, np.int64))
+    kernel = literal_entry(_grow, model.dim, *args, rngs[0], times[0])
+    out = []
+    for rng, row in zip(rngs, times):
+        start = time.perf_counter()
+        pts, steps, parents, count, status = kernel(model.dim, *args, rng, row)
+        out.append(grown(pts, steps, parents, count, status, row, time.perf_counter() - start))
+    return out
 
 
-def compiled(dim, walkers=1) -> bool:
-    """Whether numba's on-disk cache holds this growth kernel for ``dim`` and ``walkers`` (most of its compile
-    time)."""
-    return cached(_grow_each, dim, lockstep_flag(walkers))
+def compiled(dim, walkers=1, step=0.0) -> bool:
+    """Whether numba's on-disk cache holds this growth kernel for ``dim``, ``walkers`` and ``step`` (most of its
+    compile time)."""
+    return cached(_grow, dim, lockstep_flag(walkers), gaussian_flag(step))

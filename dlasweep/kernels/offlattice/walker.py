@@ -110,7 +110,7 @@ def release(w, dim, size, line, launch_box, launch_r, rng, s0, s1, s2, s3):
 
 
 @borrow
-def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor,
+def walk_to_contact(dimension, gaussian, model, launch_r, kill_r, total, pending, w, u, normal, scratch, anchor,
                     lx, ly, lz, li, mx, my, mz, mi, pts, nxt, gi, gf, words, start, blocks, cells, dirr, heads,
                     field, pstart, geo, rs, rng):
     """Release walkers until one sticks or the step budget runs out.
@@ -142,6 +142,9 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
         The model's dimension (2 or 3), a literal (``numba.literally``): each
         dimension is compiled apart, so that LLVM folds the branches on
         ``dim`` away (``_jit``; docs/performance.md has the gain).
+    gaussian : None or True
+        ``model.gaussian_flag(model.step)``: the Gaussian step (``contact.gauss_move``) is compiled in
+        only where it runs.
     model : Model
         The model (``kernels.model.Model``): size, step, stickiness, jumps,
         step budget, exact return, kill, seed shape and launch.
@@ -435,7 +438,7 @@ def walk_to_contact(dimension, model, launch_r, kill_r, total, pending, w, u, no
                         w[a] += u[a]
                     continue
                 contact = cast(w, u, 1.0, dim, size, line, pts, nxt, gi, gf, dirr, heads, mx, my, mz, mi, normal)
-            else:
+            elif gaussian is not None:  # numba prunes the branch for step 0 (``model.gaussian_flag``)
                 if jumps and g > GAUSS_JUMP * step:
                     # >>> jump
                     s0, s1, s2, s3, u0, u1, u2 = drift_dir(s0, s1, s2, s3, dim, drift * g, a0, a1, a2)
