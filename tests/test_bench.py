@@ -211,7 +211,8 @@ def test_bench_runs_only_the_models_asked_for(tmp_path, monkeypatch, capsys):
     ds = bench.run_bench(full=True, models=["lattice-3d"], echo=lines.append)
     assert {call[:3] for call in calls} == {("lattice", 3, True)}
     # the model's exact runs and its growth laws' runs, nothing of another model
-    assert set(ds.model.values) == {"lattice-3d"} and set(ds.method.values) == {"cold", "exact", *bench.LAWS["lattice-3d"]}
+    assert set(ds.model.values) == {"lattice-3d"}
+    assert set(ds.method.values) == {"cold", "exact", *bench.LAWS["lattice-3d"]}
     assert [line.split(" |")[0] for line in lines if line.startswith("| ")][1:] == ["| lattice-3d"]
     # the naive walk comes with lattice-2d; a model named twice runs once
     calls.clear()

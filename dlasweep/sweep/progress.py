@@ -60,9 +60,9 @@ def _duration(seconds) -> str:
 
 
 COMPILE_TIME = {2: "about a minute", 3: "one to two minutes"}
-"""How long a growth kernel takes to compile, by dimension, said roughly (a 3D kernel takes about
-twice a 2D one's time), so that the words hold on a faster or slower host; the figures are in
-docs/performance.md and in ``dlasweep bench``'s "first grow, cold cache" rows."""
+"""How long a growth kernel takes to compile, by dimension, said roughly (a 3D kernel takes longer
+than a 2D one), so that the words hold on a faster or slower machine; the figures are in
+docs/performance.md and in ``dlasweep bench``'s ``cold`` rows."""
 
 
 def compiling(kernels) -> str:
