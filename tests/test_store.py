@@ -273,15 +273,16 @@ def test_bench_files_are_cf_clean_and_info_describes_them(cf_tables, cfchecks, t
         assert status == 0 and err == "", err
         assert out.splitlines()[0] == f"{checked}: dlasweep kernel benchmark"
     lines = run_cli("info", path)[1].splitlines()
-    assert lines[2] == ("runs: 12 (exact 5, noise_reduction=4 2, neighbour_alpha=0.2 1, contact_distance=0.5 2, "
-                        "neighbour_alpha=0.5 1, naive 1)")  # the growth laws beside each model (bench.LAWS)
+    assert lines[2] == ("runs: 16 (exact 5, noise_reduction=4 2, neighbour_alpha=0.2 1, drift=0.01 4, "
+                        "contact_distance=0.5 2, neighbour_alpha=0.5 1, naive 1)")  # the growth laws beside each
+    # model (bench.LAWS)
     assert lines[3].split() == ["model", "N", "(exact)", "largest", "seconds", "peak", "MiB", "time", "~", "N^"]
     # no cost exponent: it is fitted over N from 1e5 (bench_targets.cost_exponent), and a quick bench runs 2000
     assert lines[4].split() == ["lattice-2d", "500,", "2000", "2000", "0.002", "120"]
     assert lines[-2] == "naive walk / exact jumps, time: N=500 4.0x"
     assert lines[-1].startswith("host memory, ns a read waiting on the last: 0.25 MiB ")  # bench.run_bench's probe
     with netCDF4.Dataset(path) as nc:
-        assert nc["peak_memory"].units == bench.MIB and nc["peak_memory"][:].tolist() == [120.5] * 12
+        assert nc["peak_memory"].units == bench.MIB and nc["peak_memory"][:].tolist() == [120.5] * 16
     with pytest.raises(store.StoreError, match="not a dlasweep dataset .missing cluster_particles"):
         store.open_sweep(path)  # nor does report take it
 
