@@ -111,8 +111,11 @@ class HarmonicMeasure:
             H_q for each q; NaN when no walker stuck to a particle.
         """
         q = np.atleast_1d(np.asarray(q, np.float64))
-        touched = self.touched[:first]
-        counts = np.bincount(touched[touched >= 0], minlength=len(self.points))
+        if first is None:
+            counts = self.hits
+        else:
+            touched = self.touched[:first]
+            counts = np.bincount(touched[touched >= 0], minlength=len(self.points))
         counts = counts[counts > 0]
         if not len(counts):
             return np.full(len(q), np.nan)
