@@ -170,6 +170,15 @@ def _parser() -> argparse.ArgumentParser:
     start.add_argument("--force", action="store_true", help="replace SPEC if it exists")
     start.set_defaults(handler=_init)
 
+    ahead = _command(commands, "compile", "compile the kernels of each model's first run ahead, into numba's cache",
+                     ["dlasweep compile", "dlasweep compile --model lattice-2d --model offlattice-2d"],
+                     "A wheel built here (pip install .) carries them already; an editable install, or a wheel "
+                     "built on another processor, compiles each model's kernels at its first run, for tens of "
+                     "seconds, unless this has run once (a job script may run it before a sweep's workers start).")
+    ahead.add_argument("--model", action="append", choices=list(BENCH_MODELS), metavar="MODEL",
+                       help=f"only this model (repeat for more): {', '.join(BENCH_MODELS)}; default every one")
+    ahead.set_defaults(handler=_compile)
+
     summary = _command(commands, "report", "write the tables and plots of a sweep's netCDF file",
                        ["dlasweep report quick.nc -o quick"])
     summary.add_argument("dataset", type=Path, metavar="DATASET", help="netCDF file written by `dlasweep sweep`")
@@ -513,6 +522,17 @@ def _init(args) -> int:
     _check_new(out, args.force)
     out.write_text(text, encoding="utf-8")
     print(f"{out}: the {args.name} example; run it with `dlasweep sweep {out}`")
+    return 0
+
+
+def _compile(args) -> int:
+    """Compile (or load) each model's first-run kernels (``sweep.precompile``), saying how long each took."""
+    from .sweep.precompile import precompile
+
+    for kind in args.model or BENCH_MODELS:
+        start = time.perf_counter()
+        precompile(kind)
+        print(f"{kind}: compiled (or loaded) in {time.perf_counter() - start:.1f} s", flush=True)
     return 0
 
 

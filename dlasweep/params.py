@@ -17,6 +17,14 @@ from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 
 MODELS = ("lattice", "offlattice")
+MODEL_KINDS = {
+    "lattice-2d": {"model": "lattice", "dim": 2},
+    "offlattice-2d": {"model": "offlattice", "dim": 2},
+    "lattice-3d": {"model": "lattice", "dim": 3},
+    "offlattice-3d": {"model": "offlattice", "dim": 3},
+}
+"""Each model and dimension by its name, as ``dlasweep bench --model`` and ``dlasweep compile --model``
+take it: each grows with kernels compiled apart."""
 SEED_SHAPES = ("point", "block", "line")
 LAUNCHES = ("circle", "box")
 STATUSES = ("ok", "boundary", "step_limit", "exhausted", "error")

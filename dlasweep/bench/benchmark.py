@@ -3,10 +3,12 @@
 Each (model, N) runs in a fresh interpreter so that its peak memory is its
 own, ``REPEATS`` times below ``HUGE_COUNT`` (the median kept); numba
 compilation is excluded by growing a small cluster first (the kernels are
-cached on disk), but in the ``cold`` rows: a user's first grow of ``targets.COLD_COUNT``
-particles, compiling included, on an empty numba cache. The naive baseline (single steps everywhere, a
-kill circle at twice the launch radius) runs at small N beside the exact
-method, so the gain is a ratio taken on the same machine at the same time.
+cached on disk), but in two rows of each model: ``cold``, a first grow of ``targets.COLD_COUNT``
+particles on an empty numba cache, compiling included (what an editable install waits), and ``installed``,
+the same first grow where the kernels were compiled ahead as the wheel's build compiles them
+(``sweep.precompile``: what a user of the wheel built on the same machine waits). The naive
+baseline (single steps everywhere, a kill circle at twice the launch radius) runs at small N
+beside the exact method, so the gain is a ratio taken on the same machine at the same time.
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ BESIDE_A_RUN = {"host_read": RUN_SET, "memory_read": MEMORY_SET}
 name of its variables (``host_read_before``, ``host_read_after``, ...) and of its column (``host ns``)."""
 BENCH_SCHEMA = {
     "seconds": Variable(("run",), np.float64, "s",
-                        "wall time to grow the cluster, compilation excluded but in the cold rows"),
+                        "wall time to grow the cluster, compilation excluded but in the cold and installed rows"),
     "seconds_low": Variable(("run",), np.float64, "s", "fastest of the repeated runs of this model, method and N"),
     "seconds_high": Variable(("run",), np.float64, "s", "slowest of the repeated runs of this model, method and N"),
     "n_grown": Variable(("run",), np.int64, "1", "particles attached"),
@@ -61,11 +63,15 @@ BENCH_SCHEMA = {
     "model": Variable(("run",), str, None, "model and dimension"),
     "method": Variable(("run",), str, None,
                        "exact jumps, the naive single-step walk with a kill circle, a growth law's parameter=value, "
-                       "or cold: the exact method's first grow on an empty numba cache, compiling included"),
+                       "cold: the exact method's first grow on an empty numba cache, compiling included, or "
+                       "installed: that first grow where the wheel's build compiled the kernels ahead"),
 }
 """The variables of ``dlasweep bench``'s dataset (one ``run`` per measurement). A table of
 its own: ``n_grown`` and ``walk_steps`` there count one cluster, not a sweep's prefixes."""
 
+
+FIRST_GROWS = {"cold": "on a cold cache", "installed": "as the wheel installs it"}
+"""The rows that time a fresh interpreter's first grow, compiling included (``probe``), and what each says."""
 
 NAIVE = {"jumps": False, "kill_factor": 2.0}
 COUNTS = {
@@ -130,18 +136,24 @@ print(json.dumps(dict(seconds=dt, n_grown=c.n, status=c.status, steps=int(c.step
 """
 
 
-def probe(params: dict, n: int, seed: int = 1, cold: bool = False) -> dict:
+def probe(params: dict, n: int, seed: int = 1, cold: bool = False, ahead: str | None = None) -> dict:
     """Grow one cluster of ``n`` with ``params`` from ``seed`` in a fresh interpreter.
 
     Returns its seconds (compile excluded), status, steps and peak memory;
     e.g. ``probe({"model": "lattice"}, 10_000_000)`` for the 1e7 figures. With
     ``cold``, the interpreter's numba cache is an empty folder and the seconds
-    are those of its first grow, compiling included: what a new user waits.
+    are those of its first grow, compiling included: what a new user waits. With ``ahead`` as well (a key
+    of ``MODELS``), another interpreter first compiles that model's kernels into the empty folder as the
+    wheel's build does (``sweep.precompile``): the first grow is then what a user of the wheel waits.
     """
     with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache} if cold else None
+        if ahead is not None:
+            subprocess.run([sys.executable, "-c", "import sys; from dlasweep.sweep.precompile import precompile; "
+                            "precompile(sys.argv[1])", ahead], capture_output=True, text=True, check=True, env=env)
         out = subprocess.run(
             [sys.executable, "-c", _PROBE, json.dumps(params), str(n), str(seed), *(["cold"] if cold else [])],
-            capture_output=True, text=True, check=True, env={**os.environ, "NUMBA_CACHE_DIR": cache} if cold else None,
+            capture_output=True, text=True, check=True, env=env,
         )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -172,7 +184,7 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
         counts = [QUICK_COUNT] if quick else COUNTS[name] + ([FULL_COUNT] if full else [])
         counts += [HUGE_COUNT] if huge and "2d" in name else []
         counts += [SCALING[0]] if full and SCALING[0] in counts else []  # again, after the long runs
-        plan += [] if quick else [(name, "cold", params, COLD_COUNT)]
+        plan += [] if quick else [(name, "cold", params, COLD_COUNT), (name, "installed", params, COLD_COUNT)]
         plan += [(name, "exact", params, n) for n in counts]
         plan += [(name, method, {**params, **law}, QUICK_COUNT if quick else LAW_COUNT)
                  for method, law in LAWS.get(name, {}).items()]
@@ -188,12 +200,13 @@ def run_bench(full: bool = False, quick: bool = False, huge: bool = False, model
     runs = {}  # (model, method, N) -> its runs, in the order of the plan
     for name, method, params, n in plan:
         again = (name, method, n) in runs
-        cold = method == "cold"  # once: a compile takes a minute, and spreads as the host's load does
-        runs.setdefault((name, method, n), []).extend(
-            _beside_the_host(params, n, cold) for _ in range(1 if quick or cold or n >= HUGE_COUNT else REPEATS))
+        first = method in FIRST_GROWS  # once: a compile takes a minute, and spreads as the host's load does
+        repeats = 1 if quick or first or n >= HUGE_COUNT else REPEATS
+        runs.setdefault((name, method, n), []).extend(_beside_the_host(params, n, method, name) for _ in range(repeats))
         r = _median_run(runs[name, method, n])
-        if cold:
-            echo(f"{name}: first grow of {n} on a cold cache {r['seconds']:.1f} s{verdict(r['seconds'], COLD_TARGET)}")
+        if first:
+            echo(f"{name}: first grow of {n} {FIRST_GROWS[method]} {r['seconds']:.1f} s"
+                 f"{verdict(r['seconds'], COLD_TARGET) if method == 'installed' else ''}")
             continue
         if again:
             echo(f"{name}: {n} again after the rest, {len(runs[name, method, n])} runs from "
@@ -304,11 +317,12 @@ def harmonic_bench(full: bool = False, quick: bool = False, echo=print, grown=No
             "harmonic_walkers_per_second": rate, "harmonic_growth_particles_per_second": growth}
 
 
-def _beside_the_host(params: dict, n: int, cold: bool = False) -> dict:
-    """``probe``'s figures (``cold``: on an empty numba cache), with the host's read times (``BESIDE_A_RUN``)
-    just before and after the run."""
+def _beside_the_host(params: dict, n: int, method: str = "exact", name: str | None = None) -> dict:
+    """``probe``'s figures, with the host's read times (``BESIDE_A_RUN``) just before and after the run:
+    ``method`` ``cold`` grows on an empty numba cache, ``installed`` where model ``name``'s kernels were
+    compiled ahead (``FIRST_GROWS``), any other with the kernels loaded first."""
     before = _host_reads("before")
-    run = probe(params, n, cold=True) if cold else probe(params, n)
+    run = probe(params, n, cold=method in FIRST_GROWS, ahead=name if method == "installed" else None)
     return {**run, **before, **_host_reads("after")}
 
 

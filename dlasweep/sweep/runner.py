@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import importlib
 import itertools
 import math
 import sys
@@ -39,10 +38,11 @@ from tqdm import tqdm
 
 from ..data import netcdf, schema
 from ..data.paths import writable
-from ..growth.cluster import compiled, kernel_of
+from ..growth.cluster import compiled
 from ..stats.fit import growth_counts
 from .parts import PARTICLES, Parts, parts_folder
 from .precision import Precision
+from .precompile import first_task_of_each_kernel, load_kernels
 from .progress import Lines, compiling
 from .session import collector_eased, connected
 from .spec import Spec, load_spec
@@ -125,7 +125,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
                     if cold:  # on a terminal and in a log: what compiles, and for about how long
                         print(f"{spec.name}: {compiling(cold)}", file=sys.stderr, flush=True)
                     dask_client = session.enter_context(connected(client, scheduler_file, workers or spec.workers, most,
-                                                                  functools.partial(_load_kernels, spec)))
+                                                                  functools.partial(load_kernels, spec)))
                     if announce:
                         print(announce, file=sys.stderr, flush=True)
                     session.enter_context(collector_eased())
@@ -161,16 +161,7 @@ def run_sweep(spec, client=None, out=None, resume=False, workers=None, progress=
 def _cold_kernels(spec) -> list:
     """The growth kernels the spec needs that numba's cache lacks (``growth.cluster.kernel_of``): the first
     tasks compile them."""
-    return [kernel for kernel, task in _first_task_of_each_kernel(spec).items() if not compiled(task.params)]
-
-
-def _first_task_of_each_kernel(spec) -> dict:
-    """``growth.cluster.kernel_of`` (model, dimension, lockstep walkers, Gaussian steps) -> the first task of
-    the spec that grows it: each is a kernel of its own."""
-    first = {}
-    for task in spec.tasks(replicates=1):
-        first.setdefault(kernel_of(task.params), task)
-    return first
+    return [kernel for kernel, task in first_task_of_each_kernel(spec).items() if not compiled(task.params)]
 
 
 def _batch_size(spec, n_todo, threads) -> int:
@@ -187,22 +178,6 @@ def _batches(todo, size, threads):
         n = max(1, min(size, (len(todo) - start) // (2 * threads)))
         yield todo[start:start + n]
         start += n
-
-
-def _load_kernels(spec):
-    """Grow and measure a cluster of a few particles of each model and dimension swept.
-
-    The kernels its tasks call load (or compile) here, once, while the
-    embedded cluster starts, not in each of its threads at once, one
-    waiting for the other under numba's lock. So does dask.array, which
-    xarray imports when it builds the dataset: imported while the tasks
-    ran, it held the GIL they need between kernels.
-    """
-    first = list(_first_task_of_each_kernel(spec).values())
-    counts = np.array([min(spec.counts[0], 10)])
-    measure_tasks(first, counts, sweep_scales(spec), spec.root_seed, [False] * len(first))
-    with contextlib.suppress(ImportError):
-        importlib.import_module("dask.array")
 
 
 def _compute(client, spec, todo, parts, bar, stream=None):
