@@ -316,18 +316,18 @@ def test_a_full_disk_exits_1_keeping_the_parts_and_resume_completes(run_cli, wri
 def test_each_model_and_dimension_swept_is_a_kernel_of_its_own():
     """The kernels are compiled per dimension (``dlasweep._jit``) and apart for lockstep walkers
     (``kernels.model.lockstep_flag``), and off the lattice for Gaussian steps (``kernels.model.gaussian_flag``):
-    each (model, dim, lockstep, gaussian) swept is loaded (``_load_kernels``) and looked up in the cache
+    each (model, dim, lockstep, gaussian) swept is loaded (``precompile.load_kernels``) and looked up in the cache
     (``_cold_kernels``) on its own."""
     spec = parse_spec("name = 'dims'\n[grid]\nn_particles = [5]\nseeds = 2\nsize = [40]\n"
                       "[model]\nmodel = ['lattice', 'offlattice']\ndim = [2, 3]\nwalkers = [1, 3, 5]\n")
-    kernels = sweep._first_task_of_each_kernel(spec)
+    kernels = sweep.first_task_of_each_kernel(spec)
     assert sorted(kernels) == [(model, dim, lockstep, False) for model in ("lattice", "offlattice")
                                for dim in (2, 3) for lockstep in (False, True)]
     assert all((task.params["model"], task.params["dim"], task.params["walkers"] > 1, False) == key
                for key, task in kernels.items())
     stepped = parse_spec("name = 'steps'\n[grid]\nn_particles = [5]\nseeds = 2\n"
                          "[model]\nmodel = 'offlattice'\nstep = [0.0, 0.5, 1.0]\n")
-    assert sorted(sweep._first_task_of_each_kernel(stepped)) == [("offlattice", 2, False, gaussian)
+    assert sorted(sweep.first_task_of_each_kernel(stepped)) == [("offlattice", 2, False, gaussian)
                                                                  for gaussian in (False, True)]
 
 

@@ -322,7 +322,10 @@ def _beside_the_host(params: dict, n: int, method: str = "exact", name: str | No
     ``method`` ``cold`` grows on an empty numba cache, ``installed`` where model ``name``'s kernels were
     compiled ahead (``FIRST_GROWS``), any other with the kernels loaded first."""
     before = _host_reads("before")
-    run = probe(params, n, cold=method in FIRST_GROWS, ahead=name if method == "installed" else None)
+    if method in FIRST_GROWS:
+        run = probe(params, n, cold=True, ahead=name if method == "installed" else None)
+    else:
+        run = probe(params, n)
     return {**run, **before, **_host_reads("after")}
 
 

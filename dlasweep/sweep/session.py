@@ -59,7 +59,7 @@ def collector_eased():
 def connected(client, scheduler_file, workers, n_tasks, load):
     """A client: the one given, one for an address or scheduler file, or an embedded cluster.
 
-    ``load`` is called in a thread while the embedded cluster starts (the runner's ``_load_kernels``).
+    ``load`` is called in a thread while the embedded cluster starts (``precompile.load_kernels``).
     """
     # distributed loads here, not with the module: ``dlasweep grow`` and ``info`` never need it
     import dask
