@@ -456,12 +456,14 @@ def test_grow_shows_progress_on_a_terminal_only_and_what_compiles_in_a_log_too(r
     assert status == 0 and err == "" and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(importlib.import_module("dlasweep.growth.cluster"), "compiled",
                         lambda params: params["model"] != "offlattice")
-    notice = "dlasweep grow: compiling the off-lattice 3D kernels, once: one to two minutes\n"
+    notice = ("dlasweep grow: compiling the off-lattice 3D kernels, once: one to two minutes "
+              "(`dlasweep compile` compiles every model ahead)\n")
     status, _, err = run_cli("grow", "-n", "30", "--model", "offlattice", "--dim", "3", "-o", tmp_path / "log.nc")
     assert status == 0 and err == notice and bars[-1].__class__.__name__ == "nullcontext"
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     status, _, err = run_cli("grow", "-n", "300", "--model", "offlattice", "-o", tmp_path / "shown.nc")
-    assert status == 0 and err.startswith("dlasweep grow: compiling the off-lattice 2D kernels, once: about a minute\n")
+    assert status == 0 and err.startswith("dlasweep grow: compiling the off-lattice 2D kernels, once: about a minute "
+                                          "(`dlasweep compile` compiles every model ahead)\n")
     assert bars[-1].total == 300 and bars[-1].n == 300  # the bar followed the growth to the end
     with store.open_sweep(tmp_path / "shown.nc") as ds:
         np.testing.assert_array_equal(ragged.cluster_points(ds, 0), dla.grow(300, 0, model="offlattice").points)

@@ -66,7 +66,8 @@ docs/performance.md and in ``dlasweep bench``'s ``cold`` rows."""
 
 
 def compiling(kernels) -> str:
-    """What compiles and how long to expect, e.g. ``compiling the off-lattice 2D kernels, once: about a minute``.
+    """What compiles and how long to expect, e.g. ``compiling the off-lattice 2D kernels, once: about a minute``,
+    and, where ``dlasweep compile`` would have compiled them (each model's defaults), that it does.
 
     ``kernels`` lists (model, dim, lockstep, gaussian) of the growth kernels that numba's cache lacks
     (``growth.cluster.kernel_of``); lockstep walkers and Gaussian steps are kernels of their own.
@@ -75,8 +76,11 @@ def compiling(kernels) -> str:
              + (" lockstep" if lockstep else "") + (" Gaussian-step" if gaussian else "")
              for model, dim, lockstep, gaussian in kernels]
     each = " each" if len(names) > 1 else ""
+    # the kernels `dlasweep compile` compiles ahead: each model's defaults, one walker and exact moves
+    ahead = " (`dlasweep compile` compiles every model ahead)" if not any(
+        lockstep or gaussian for _, _, lockstep, gaussian in kernels) else ""
     return (f"compiling the {', '.join(names[:-1]) + ' and ' if len(names) > 1 else ''}{names[-1]} kernels, "
-            f"once: {COMPILE_TIME[max(dim for _, dim, _, _ in kernels)]}{each}")
+            f"once: {COMPILE_TIME[max(dim for _, dim, _, _ in kernels)]}{each}{ahead}")
 
 
 def growth_bar(n, params):
