@@ -2,9 +2,10 @@
 
 Each computes one documented quantity the direct way, one point (one box,
 one prefix) at a time, for small inputs, reusing nothing of the package.
-Among them the kernels' references: a lattice walk of single steps and a
-walk-on-spheres, and the contact checks of grown clusters (every particle
-rests on an earlier one, none overlap).
+Among them the kernels' references: a lattice walk of single steps, a
+walk-on-spheres, an off-lattice growth by drifted Gaussian steps, and the
+contact checks of grown clusters (every particle rests on an earlier one, none
+overlap).
 """
 
 from __future__ import annotations

@@ -6,7 +6,8 @@ exit direction from a ball's centre (von Mises in 2D, von Mises-Fisher in 3D,
 return to a substrate's launch plane (``walk.drift_to_plane``) and the lattice's
 tilted moves (``walker.drifted_move``). Then clusters: grown with the jumps
 against single steps at small and moderate drift (the tolerance the jumps keep),
-D rising with drift towards the compact limit, and the bad-input rule.
+off the lattice against small drifted Gaussian steps, D rising with drift
+towards the compact limit, and the bad-input rule.
 
 Kolmogorov-Smirnov and chi-square tests hold p above ``P_MIN`` = 1e-4 each; with
 the cases of a test that is a false alarm below 2e-3 a test (Bonferroni).
@@ -269,7 +270,9 @@ def test_offlattice_jumps_match_small_drifted_gaussian_steps(case):
     from the drifted exit law, ``walk.drift_dir``, at concentration drift x radius) against clusters of
     walkers taking small Gaussian steps of the drifted Brownian motion (``naive.gaussian_drift_cluster``:
     a step of spread s moves by mu s**2 plus N(0, s**2) an axis, exact in free space; its contacts by the
-    step's end, off by about 0.01 of a diameter), nothing of the package's walk shared. Point seed with a
+    step's end, off by about 0.01 of a diameter), nothing of the package's walk shared (the package's own
+    Gaussian steps, ``step`` with ``jumps=false``, take about 1e6 steps a particle here at a spread of 0.1,
+    and with jumps draw their far moves from ``drift_dir`` too). Point seed with a
     kill circle and substrate, 2D and 3D, drift 0.05 and 0.3; 12 seeds each, the means compared as
     the lattice's are (``_assert_same_means``: false alarm 1e-3 a case). With the concentration of
     ``drift_dir`` multiplied by 3, six of the eight cases fail: the four at drift 0.05 by 6 to 10 standard
