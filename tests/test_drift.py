@@ -247,9 +247,9 @@ def _assert_same_means(case, fast, slow):
     assert (z < t).all(), (case, z.round(2), fast.mean(axis=0).round(2), slow.mean(axis=0).round(2))
 
 
-OFF_FAR = dict(model="offlattice", launch_factor=2.0, kill_factor=1.5)
+OFF_FAR = dict(FAR, model="offlattice")
 """``FAR`` off the lattice: walkers cross open space by jumps of the drifted exit law."""
-OFF_HIGH = dict(model="offlattice", launch_margin=40.0)
+OFF_HIGH = dict(HIGH, model="offlattice")
 """``HIGH`` off the lattice: walkers released 40 diameters above a deposit come down by jumps."""
 GAUSS_CASES = {
     "offlattice-2d-0.05": dict(n=1000, drift=0.05, **OFF_FAR),
