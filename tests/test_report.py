@@ -318,6 +318,21 @@ def test_captions_promise_no_interval_a_sweep_of_few_seeds_lacks(monkeypatch, tm
         assert not any("95% CI" in ax.get_ylabel() for ax in fig.axes if ax.get_visible()), plot.__name__
 
 
+def test_the_anisotropy_figure_says_it_is_not_a_drifts_elongation(monkeypatch, tmp_path):
+    """Under a drift the clusters grow up into it as cones, which <cos 4 theta> does not measure: the
+    figure says so (title and caption); without a drift it says nothing of drift."""
+    from dlasweep.reporting.plots import _anisotropy
+
+    drifted = synthetic_sweep({"drift": [0.0, 0.3], "kill_factor": [2.0]}, counts=(100, 200), seeds=2)
+    fig, caption = drawn(monkeypatch, _anisotropy, drifted, tmp_path, caption=True)
+    (ax,) = [ax for ax in fig.axes if ax.get_visible()]
+    assert "not the elongation along a drift" in ax.get_title()
+    assert "not the cluster's elongation along the drift" in caption and "Rg/Rmax" in caption
+    plain = synthetic_sweep({"kill_factor": [0.0, 2.0]}, counts=(100, 200), seeds=2)
+    fig, caption = drawn(monkeypatch, _anisotropy, plain, tmp_path, caption=True)
+    assert "drift" not in caption and "drift" not in fig.axes[0].get_title()
+
+
 def test_report_says_whether_the_cis_resolve_a_difference_in_d(tmp_path):
 
     ds = synthetic_sweep({"stickiness": [1.0, 0.1]}, counts=(100, 300), seeds=MIN_CI_SEEDS)

@@ -199,12 +199,19 @@ def _anisotropy(sweep, path):
     ax.set_xlabel("particles N")
     ci = _any_ci(sweep, "anisotropy")
     ax.set_ylabel("anisotropy of the outer mass" + (f" ({LEVEL} CI)" if ci else ""))
-    ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)", fontsize=9)
+    drifted = any(sweep.param("drift", config) > 0 for config in sweep.configs)
+    ax.set_title("Growth along the lattice axes: <cos 4 theta> (2D), cubic harmonic (3D)"
+                 + ("\nnot the elongation along a drift" if drifted else ""), fontsize=9)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=6, ncols=3)
     save_figure(fig, path)
     return ("The cubic anisotropy of the outer half of the mass about the seed, mean over seeds"
             + (f" with its {LEVEL} CI" if ci else f" (no CI: fewer than {MIN_CI_SEEDS} seeds)") + ": 1 if the mass lay "
-            "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N).")
+            "along the axes, 0 for an isotropic cluster (square-lattice arms are expected to raise it with N)."
+            + (" Under a drift it is not the cluster's elongation along the drift: it weighs the directions of the "
+               "outer mass by how near they lie to any lattice axis, so a cone growing up into a drift along an "
+               "axis raises it, and one growing along a diagonal lowers it, however narrow the cone; the cone's "
+               "elongation shows in the pictures and in the summary's Rg/Rmax, which falls as it narrows."
+               if drifted else ""))
 
 
 def _any_ci(sweep, stem) -> bool:
