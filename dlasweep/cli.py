@@ -175,8 +175,8 @@ def _parser() -> argparse.ArgumentParser:
                      "A wheel built here (pip install .) carries them already; an editable install, or a wheel "
                      "built on another processor, compiles each model's kernels at its first run, for tens of "
                      "seconds, unless this has run once (a job script may run it before a sweep's workers start).")
-    ahead.add_argument("--model", action="append", choices=list(BENCH_MODELS), metavar="MODEL",
-                       help=f"only this model (repeat for more): {', '.join(BENCH_MODELS)}; default every one")
+    ahead.add_argument("--model", action="append", choices=list(_params.MODEL_KINDS), metavar="MODEL",
+                       help=f"only this model (repeat for more): {', '.join(_params.MODEL_KINDS)}; default every one")
     ahead.set_defaults(handler=_compile)
 
     summary = _command(commands, "report", "write the tables and plots of a sweep's netCDF file",
@@ -527,12 +527,10 @@ def _init(args) -> int:
 
 def _compile(args) -> int:
     """Compile (or load) each model's first-run kernels (``sweep.precompile``), saying how long each took."""
-    from .sweep.precompile import precompile
+    from .sweep.precompile import precompile_each
 
-    for kind in args.model or BENCH_MODELS:
-        start = time.perf_counter()
-        precompile(kind)
-        print(f"{kind}: compiled (or loaded) in {time.perf_counter() - start:.1f} s", flush=True)
+    precompile_each(args.model or _params.MODEL_KINDS,
+                    lambda kind, seconds: print(f"{kind}: compiled (or loaded) in {seconds:.1f} s", flush=True))
     return 0
 
 

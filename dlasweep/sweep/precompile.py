@@ -76,6 +76,22 @@ def precompile(kind: str):
     load_kernels(parse_spec(_FIRST_RUN.format(**MODEL_KINDS[kind]), default_name=f"compile {kind}"))
 
 
+def precompile_each(kinds, say):
+    """``precompile`` each model of ``kinds`` in turn, and ``say(kind, seconds)`` as each is done.
+
+    Parameters
+    ----------
+    kinds : iterable of str
+        Keys of ``params.MODEL_KINDS``.
+    say : callable
+        Receives each model's name and the seconds its kernels took to compile (or load).
+    """
+    for kind in kinds:
+        start = time.perf_counter()
+        precompile(kind)
+        say(kind, time.perf_counter() - start)
+
+
 def build(kinds: str):
     """``precompile`` each model named in ``kinds``, saying how long each took: the wheel's build step.
 
@@ -91,7 +107,5 @@ def build(kinds: str):
     if unknown:
         raise ValueError(f"DLASWEEP_PRECOMPILE: unknown model {unknown[0]!r}; one of all, none, "
                          f"{', '.join(MODEL_KINDS)}, or several separated by commas")
-    for kind in names:
-        start = time.perf_counter()
-        precompile(kind)
-        print(f"dlasweep: compiled the {kind} kernels in {time.perf_counter() - start:.0f} s", flush=True)
+    precompile_each(names, lambda kind, seconds: print(f"dlasweep: compiled the {kind} kernels in {seconds:.0f} s",
+                                                        flush=True))
